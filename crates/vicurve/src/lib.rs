@@ -1,0 +1,15 @@
+//! # vicurve
+//!
+//! Sub-pixel measurement of curves (thin lines, *contours*) and edges
+//! (*silhouettes*) in grayscale images by Virtual Image Correlation with
+//! B-splines (Réthoré & François, 2013).
+//!
+//! Coordinates are in pixels: `x` is the column, `y` the row, and the centre
+//! of pixel (row `i`, column `j`) is at `(x, y) = (j, i)`; see [`image`].
+#![deny(missing_docs)]
+
+pub mod error;
+pub mod image;
+
+pub use error::{Error, Result};
+pub use image::Image;
