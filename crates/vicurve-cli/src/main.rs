@@ -1,1 +1,84 @@
-fn main() {}
+//! `vicurve`: measure curves and edges in images to a fraction of a pixel.
+//!
+//! Errors are printed as one line, `vicurve: error: ...`, and the exit code
+//! says what happened: 0 success (a fit that hit its iteration limit prints
+//! a warning), 1 an error in the input or the files, 2 a usage error, 3 a
+//! fit that diverged (its outputs are still written).
+
+mod cmd_demo;
+mod cmd_eval;
+mod cmd_measure;
+mod cmd_synth;
+mod output;
+mod overlay;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Sub-pixel measurement of contours (thin lines) and silhouettes (edges) in
+/// images by Virtual Image Correlation with B-splines.
+#[derive(Parser)]
+#[command(name = "vicurve", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Measure a curve in an image from a starting curve.
+    Measure(cmd_measure::Args),
+    /// Render a test image with exactly known geometry (and its truth file).
+    Synth(cmd_synth::Args),
+    /// Compare measured points with a truth file: bias, scatter, max error.
+    Eval(cmd_eval::Args),
+    /// Synthesise a star, measure it from a circle, print the accuracy and
+    /// write the overlay.
+    Demo(cmd_demo::Args),
+}
+
+/// How a command failed.
+pub enum Failure {
+    /// Bad input or files: exit 1.
+    Error(String),
+    /// The fit diverged (outputs written): exit 3.
+    Diverged(String),
+}
+
+impl From<vicurve::Error> for Failure {
+    fn from(e: vicurve::Error) -> Self {
+        Failure::Error(e.to_string())
+    }
+}
+
+impl From<String> for Failure {
+    fn from(e: String) -> Self {
+        Failure::Error(e)
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Measure(a) => cmd_measure::run(a),
+        Command::Synth(a) => cmd_synth::run(a),
+        Command::Eval(a) => cmd_eval::run(a),
+        Command::Demo(a) => cmd_demo::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Error(msg)) => {
+            eprintln!("vicurve: error: {}", one_line(&msg));
+            ExitCode::from(1)
+        }
+        Err(Failure::Diverged(msg)) => {
+            eprintln!("vicurve: error: {}", one_line(&msg));
+            ExitCode::from(3)
+        }
+    }
+}
+
+/// Messages are printed on one line whatever their source.
+fn one_line(msg: &str) -> String {
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
+}

@@ -8,8 +8,16 @@
 //! of pixel (row `i`, column `j`) is at `(x, y) = (j, i)`; see [`image`].
 #![deny(missing_docs)]
 
+pub mod band;
+pub mod curve;
 pub mod error;
+pub mod fit;
 pub mod image;
+pub mod interp;
+pub mod io;
+pub mod solver;
+pub mod spline;
+pub mod virtual_image;
 
 pub use error::{Error, Result};
 pub use image::Image;

@@ -1,0 +1,258 @@
+//! `vicurve measure`.
+
+use crate::output::{polarity_text, write_json, write_points_csv, ResultFile};
+use crate::overlay::{write_png, write_svg, Layer, Style};
+use crate::Failure;
+use std::path::{Path, PathBuf};
+use vicurve::curve::InitialCurve;
+use vicurve::fit::{measure, parse_stages, FitConfig, Measurement, Outcome, Polarity};
+use vicurve::interp::Interpolation;
+use vicurve::virtual_image::Kind;
+use vicurve::Image;
+
+/// Measure a curve in an image.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The image: PNG, TIFF or JPEG; 8 or 16 bits; gray or colour (converted
+    /// to luminance).
+    pub image: PathBuf,
+    /// Starting curve: `circle:CX,CY,R`, `segment:X0,Y0,X1,Y1` or
+    /// `polyline:FILE.csv` (rows `x,y`, header allowed), in pixels (x =
+    /// column, y = row, pixel centres at integers). It must cross or lie near
+    /// the curve to measure.
+    #[arg(long)]
+    pub init: String,
+    /// Treat a `polyline:` start as closed (last point joins the first).
+    #[arg(long)]
+    pub closed: bool,
+    /// `silhouette` (an edge between a dark and a bright region) or
+    /// `contour` (a thin line).
+    #[arg(long, default_value = "silhouette")]
+    pub kind: Kind,
+    /// Force the polarity instead of estimating it: `bright-inside`,
+    /// `dark-inside`, `bright-left`, `bright-right` (open curves, as seen on
+    /// screen along the curve's direction), `bright-line`, `dark-line`, or
+    /// `auto`.
+    #[arg(long, default_value = "auto")]
+    pub polarity: String,
+    /// Coarse-to-fine stages `R:N,...` (band half-width in px : number of
+    /// elements, or `R:Lpx` for elements of length L px). Default: 20, 10, 5
+    /// and 2 px with elements of 80, 40, 40, 40 px.
+    #[arg(long)]
+    pub stages: Option<String>,
+    /// Degree of the B-splines (1 to 5).
+    #[arg(long, default_value_t = 3)]
+    pub degree: usize,
+    /// Image interpolation: `cubic` (B-spline, the default) or `bilinear`.
+    #[arg(long)]
+    pub interp: Option<String>,
+    /// Convergence tolerance on the displacement update, pixels.
+    #[arg(long, default_value_t = 1e-4)]
+    pub tolerance: f64,
+    /// Iteration limit per stage.
+    #[arg(long, default_value_t = 200)]
+    pub max_iter: usize,
+    #[command(flatten)]
+    pub outputs: Outputs,
+}
+
+/// The optional output files of a measurement.
+#[derive(clap::Args, Default)]
+pub struct Outputs {
+    /// Write the result (B-spline, history, outcome, configuration) as JSON.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write the samples as CSV with columns s,x,y,nx,ny,sigma.
+    #[arg(long)]
+    pub points: Option<PathBuf>,
+    /// Write an SVG overlay (image, initial curve, band, measured curve).
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Write a PNG overlay.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Magnification of the PNG overlay (integer).
+    #[arg(long, default_value_t = 1)]
+    pub png_scale: u32,
+}
+
+impl Outputs {
+    fn any(&self) -> bool {
+        self.out.is_some() || self.points.is_some() || self.svg.is_some() || self.png.is_some()
+    }
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let init = parse_init(&args.init, args.closed)?;
+    let config = build_config(&args)?;
+    let image = vicurve::io::load_image(&args.image)?;
+    let m = measure(&image, &init, &config)?;
+    let path_text = args.image.display().to_string();
+    write_outputs(&args.outputs, &path_text, &image, &init, &config, &m)?;
+    if !args.outputs.any() {
+        print_summary(&config, &m);
+    }
+    finish(&m)
+}
+
+/// Map the outcome to the exit status: diverged is a failure, an iteration
+/// limit a warning.
+pub fn finish(m: &Measurement) -> Result<(), Failure> {
+    match m.outcome {
+        Outcome::Converged => Ok(()),
+        Outcome::IterationLimit => {
+            eprintln!(
+                "vicurve: warning: the iteration limit was reached before convergence; raise --max-iter or start closer to the curve"
+            );
+            Ok(())
+        }
+        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
+            "the fit diverged: {divergence}; start from a curve closer to the edge, or use a narrower band (--stages)"
+        ))),
+    }
+}
+
+/// Parse `--init`; polylines are read from their file.
+pub fn parse_init(spec: &str, closed: bool) -> Result<InitialCurve, Failure> {
+    if let Some(file) = spec.strip_prefix("polyline:") {
+        let points = vicurve::io::read_polyline_csv(Path::new(file))?;
+        return Ok(InitialCurve::Polyline { points, closed });
+    }
+    if closed {
+        return Err(Failure::Error("--closed applies to polyline: starts only".into()));
+    }
+    Ok(spec.parse::<InitialCurve>()?)
+}
+
+fn build_config(args: &Args) -> Result<FitConfig, Failure> {
+    let mut config = FitConfig {
+        kind: args.kind,
+        polarity: parse_polarity(&args.polarity)?,
+        degree: args.degree,
+        tolerance: args.tolerance,
+        max_iterations: args.max_iter,
+        ..FitConfig::default()
+    };
+    if let Some(s) = &args.stages {
+        config.stages = Some(parse_stages(s)?);
+    }
+    if let Some(i) = &args.interp {
+        config.interpolation = parse_interp(i)?;
+    }
+    config.validate()?;
+    Ok(config)
+}
+
+pub fn parse_interp(s: &str) -> Result<Interpolation, Failure> {
+    match s {
+        "cubic" | "cubic-bspline" => Ok(Interpolation::CubicBSpline),
+        "bilinear" | "linear" => Ok(Interpolation::Bilinear),
+        _ => Err(Failure::Error(format!(
+            "unknown interpolation '{s}' (expected cubic or bilinear)"
+        ))),
+    }
+}
+
+pub fn parse_polarity(s: &str) -> Result<Polarity, Failure> {
+    match s {
+        "auto" => Ok(Polarity::Auto),
+        "bright-inside" | "bright-left" | "bright-line" | "positive" => Ok(Polarity::Positive),
+        "dark-inside" | "bright-right" | "dark-line" | "negative" => Ok(Polarity::Negative),
+        _ => Err(Failure::Error(format!(
+            "unknown polarity '{s}' (expected auto, bright-inside, dark-inside, bright-left, bright-right, bright-line or dark-line)"
+        ))),
+    }
+}
+
+/// Write every requested output; they are independent, so one failing does
+/// not prevent the others (the first error is reported).
+pub fn write_outputs(
+    args: &Outputs,
+    path_text: &str,
+    image: &Image,
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+) -> Result<(), Failure> {
+    let mut first_error: Option<String> = None;
+    let mut note = |r: Result<(), String>| {
+        if let Err(e) = r {
+            first_error.get_or_insert(e);
+        }
+    };
+    if let Some(p) = &args.out {
+        let record = ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
+        note(write_json(p, &record));
+    }
+    if let Some(p) = &args.points {
+        note(write_points_csv(p, m));
+    }
+    if args.svg.is_some() || args.png.is_some() {
+        let layers = overlay_layers(init, config, m)?;
+        if let Some(p) = &args.svg {
+            note(write_svg(p, image, &layers));
+        }
+        if let Some(p) = &args.png {
+            note(write_png(p, image, &layers, args.png_scale));
+        }
+    }
+    match first_error {
+        Some(e) => Err(Failure::Error(e)),
+        None => Ok(()),
+    }
+}
+
+/// The initial curve (dashed blue), the final band's borders (thin yellow)
+/// and the measured curve (red).
+pub fn overlay_layers(init: &InitialCurve, config: &FitConfig, m: &Measurement) -> Result<Vec<Layer>, Failure> {
+    let closed = m.curve.is_closed();
+    let init_pts = init.dense_points(1.0)?;
+    let r = m.stages.last().map_or(0.0, |s| s.half_width);
+    let offset = |k: f64| -> Vec<[f64; 2]> {
+        m.samples
+            .iter()
+            .map(|s| [s.x + k * r * s.nx, s.y + k * r * s.ny])
+            .collect()
+    };
+    let style = |color: [u8; 4], width: f32, dash: Option<[f32; 2]>| Style { color, width, dash };
+    let mut layers = vec![Layer {
+        label: "initial curve".into(),
+        points: init_pts,
+        closed: init.is_closed(),
+        style: style([40, 120, 255, 255], 1.0, Some([4.0, 3.0])),
+    }];
+    if r > 0.0 {
+        for (k, label) in [(-1.0, "band border (inner side)"), (1.0, "band border (outer side)")] {
+            layers.push(Layer {
+                label: format!("{label}, R = {r} px"),
+                points: offset(k),
+                closed,
+                style: style([255, 210, 0, 200], 0.5, None),
+            });
+        }
+    }
+    layers.push(Layer {
+        label: format!("measured {} ({})", config.kind, m.outcome),
+        points: m.points(),
+        closed,
+        style: style([255, 40, 40, 255], 1.0, None),
+    });
+    Ok(layers)
+}
+
+pub fn print_summary(config: &FitConfig, m: &Measurement) {
+    let c = m.stages.last().map_or(f64::NAN, |s| s.c);
+    println!("outcome:     {}", m.outcome);
+    println!("iterations:  {} over {} stage(s)", m.iterations(), m.stages.len());
+    println!("residual:    {:.3e} (RMS gray level)", m.residual_rms());
+    println!("polarity:    {}", polarity_text(config.kind, m.curve.is_closed(), c));
+    println!("length:      {:.4} px", m.length());
+    if let Some(a) = m.area() {
+        println!("area:        {:.4} px^2", a);
+    }
+    let sig: Vec<f64> = m.samples.iter().map(|s| s.sigma).filter(|v| v.is_finite()).collect();
+    if !sig.is_empty() {
+        let mean = sig.iter().sum::<f64>() / sig.len() as f64;
+        println!("sigma:       {:.2e} px (mean noise uncertainty of the position)", mean);
+    }
+}

@@ -1,0 +1,277 @@
+//! The narrow band: the pixels around a reference curve, with their
+//! curvilinear coordinates `(s, r)`.
+//!
+//! A pixel centre `X` belongs to the band of half-width `R` around the
+//! reference curve `x0` when its exact closest point `x0(s)` is an interior
+//! point of the curve (not an end of an open curve: pixels past the ends are
+//! left out), its signed distance `r = (X - x0(s)) . n(s)` satisfies
+//! `|r| < R`, and it is on the near side of the local centre of curvature
+//! (`1 - kappa r > 0.1`; beyond, the closest point is ambiguous).
+//!
+//! Everything that depends only on the reference curve is computed here,
+//! once per reference: `s`, `r`, the normal, the `p + 1` non-zero
+//! displacement basis values at `s`, and the virtual image profile
+//! `gamma(r / R)` with its derivative.
+//!
+//! The closest point is found in two steps: a search over a polyline of the
+//! curve (chords about `R / 2` long) gives each pixel a starting parameter,
+//! then Newton's method on the exact curve refines it ([`SplineCurve::project`]).
+
+use crate::curve::SplineCurve;
+use crate::error::{Error, Result};
+use crate::spline::{Basis, MAX_DEGREE};
+use crate::virtual_image::Kind;
+use rayon::prelude::*;
+
+/// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
+/// out: too close to (or beyond) the centre of curvature.
+const MIN_JACOBIAN: f64 = 0.1;
+
+/// The band pixels and their precomputed data; see the [module docs](self).
+#[derive(Clone, Debug)]
+pub struct Band {
+    half_width: f64,
+    kind: Kind,
+    degree: usize,
+    pub(crate) pos: Vec<[f64; 2]>,
+    pub(crate) normal: Vec<[f64; 2]>,
+    pub(crate) s: Vec<f64>,
+    pub(crate) r: Vec<f64>,
+    pub(crate) first: Vec<u32>,
+    /// `p + 1` basis values per pixel, pixel after pixel.
+    pub(crate) basis: Vec<f64>,
+    /// `gamma(r / R)`.
+    pub(crate) gamma: Vec<f64>,
+    /// `gamma'(r / R) / R`, the derivative of the profile with respect to `r`.
+    pub(crate) dgamma: Vec<f64>,
+}
+
+/// One band pixel, as [`Band::build`] finds it before it is stored.
+struct Candidate {
+    pos: [f64; 2],
+    normal: [f64; 2],
+    s: f64,
+    r: f64,
+}
+
+impl Band {
+    /// The band of half-width `half_width` (pixels) around `curve`, for the
+    /// displacement basis `basis` (whose parameter is the curve's) and the
+    /// profile of `kind`, in an image of `width x height` pixels.
+    ///
+    /// Errors: [`Error::InvalidParameter`] for a half-width under 0.5 px or
+    /// a basis whose length differs from the curve's;
+    /// [`Error::CurveOutsideImage`] when the curve leaves the image;
+    /// [`Error::BandOutsideImage`] when the band does (interpolation needs the
+    /// band inside the pixel centres' hull `[0, width-1] x [0, height-1]`).
+    pub fn build(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        kind: Kind,
+        width: usize,
+        height: usize,
+    ) -> Result<Band> {
+        if !(half_width.is_finite() && half_width >= 0.5) {
+            return Err(Error::invalid(
+                "band half-width",
+                format!("{half_width} px (must be at least 0.5 px)"),
+            ));
+        }
+        let l = curve.param_length();
+        if (basis.length() - l).abs() > 1e-9 * l.max(1.0) || basis.is_closed() != curve.is_closed() {
+            return Err(Error::invalid(
+                "displacement basis",
+                "its length or closure differs from the reference curve's",
+            ));
+        }
+        check_inside(curve, half_width, width, height)?;
+
+        // Polyline of the curve: chords short enough that the closest chord
+        // leads Newton to the global closest point.
+        let step = (0.5 * half_width).clamp(0.5, 4.0);
+        let count = ((l / step).ceil() as usize).max(4);
+        let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
+        let verts: Vec<[f64; 2]> = params.iter().map(|&u| curve.point(u)).collect();
+        let nseg = if curve.is_closed() { verts.len() } else { verts.len() - 1 };
+
+        let reach = half_width + step + 1.0;
+        let bb = verts.iter().fold(
+            [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+            |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+        );
+        let gx0 = ((bb[0] - reach).floor().max(0.0)) as usize;
+        let gy0 = ((bb[1] - reach).floor().max(0.0)) as usize;
+        let gx1 = ((bb[2] + reach).ceil().min(width as f64 - 1.0)).max(0.0) as usize;
+        let gy1 = ((bb[3] + reach).ceil().min(height as f64 - 1.0)).max(0.0) as usize;
+        let gw = gx1 + 1 - gx0;
+        let gh = gy1 + 1 - gy0;
+        let mut best_d2 = vec![f64::INFINITY; gw * gh];
+        let mut best_u = vec![0.0; gw * gh];
+        for k in 0..nseg {
+            let a = verts[k];
+            let b = verts[(k + 1) % verts.len()];
+            let ua = params[k];
+            let ub = if k + 1 < params.len() { params[k + 1] } else { l };
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let dd = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
+            let x_lo = ((a[0].min(b[0]) - reach).floor().max(gx0 as f64)) as usize;
+            let x_hi = ((a[0].max(b[0]) + reach).ceil().min(gx1 as f64)) as usize;
+            let y_lo = ((a[1].min(b[1]) - reach).floor().max(gy0 as f64)) as usize;
+            let y_hi = ((a[1].max(b[1]) + reach).ceil().min(gy1 as f64)) as usize;
+            for y in y_lo..=y_hi {
+                let row = (y - gy0) * gw;
+                let py = y as f64 - a[1];
+                for x in x_lo..=x_hi {
+                    let px = x as f64 - a[0];
+                    let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
+                    let ex = px - t * d[0];
+                    let ey = py - t * d[1];
+                    let d2 = ex * ex + ey * ey;
+                    let cell = row + x - gx0;
+                    if d2 < best_d2[cell] {
+                        best_d2[cell] = d2;
+                        best_u[cell] = ua + t * (ub - ua);
+                    }
+                }
+            }
+        }
+
+        // Refine on the exact curve, row by row in parallel (raster order kept).
+        let cutoff2 = (half_width + step).powi(2);
+        let rows: Vec<Vec<Candidate>> = (0..gh)
+            .into_par_iter()
+            .map(|j| {
+                let mut out = Vec::new();
+                for i in 0..gw {
+                    let cell = j * gw + i;
+                    if best_d2[cell] > cutoff2 {
+                        continue;
+                    }
+                    let x = (gx0 + i) as f64;
+                    let y = (gy0 + j) as f64;
+                    let pr = curve.project(x, y, best_u[cell]);
+                    if pr.at_end || pr.r.abs() >= half_width || 1.0 - pr.curvature * pr.r <= MIN_JACOBIAN {
+                        continue;
+                    }
+                    out.push(Candidate {
+                        pos: [x, y],
+                        normal: pr.normal,
+                        s: pr.u,
+                        r: pr.r,
+                    });
+                }
+                out
+            })
+            .collect();
+
+        let total: usize = rows.iter().map(Vec::len).sum();
+        let p = basis.degree();
+        let mut band = Band {
+            half_width,
+            kind,
+            degree: p,
+            pos: Vec::with_capacity(total),
+            normal: Vec::with_capacity(total),
+            s: Vec::with_capacity(total),
+            r: Vec::with_capacity(total),
+            first: Vec::with_capacity(total),
+            basis: Vec::with_capacity(total * (p + 1)),
+            gamma: Vec::with_capacity(total),
+            dgamma: Vec::with_capacity(total),
+        };
+        let mut v = [0.0; MAX_DEGREE + 1];
+        for c in rows.into_iter().flatten() {
+            let first = basis.eval(c.s, &mut v);
+            let rho = c.r / half_width;
+            band.pos.push(c.pos);
+            band.normal.push(c.normal);
+            band.s.push(c.s);
+            band.r.push(c.r);
+            band.first.push(first as u32);
+            band.basis.extend_from_slice(&v[..=p]);
+            band.gamma.push(kind.gamma(rho));
+            band.dgamma.push(kind.gamma_prime(rho) / half_width);
+        }
+        Ok(band)
+    }
+
+    /// Number of pixels in the band.
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// Whether the band holds no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+
+    /// Half-width `R`, pixels.
+    pub fn half_width(&self) -> f64 {
+        self.half_width
+    }
+
+    /// The profile kind of the virtual image.
+    pub fn kind(&self) -> Kind {
+        self.kind
+    }
+
+    /// Degree of the displacement basis.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// Pixel centres `[x, y]` of the band.
+    pub fn positions(&self) -> &[[f64; 2]] {
+        &self.pos
+    }
+
+    /// Curvilinear abscissa (reference curve parameter) of each pixel, pixels.
+    pub fn s(&self) -> &[f64] {
+        &self.s
+    }
+
+    /// Signed distance of each pixel to the reference curve, pixels.
+    pub fn r(&self) -> &[f64] {
+        &self.r
+    }
+}
+
+/// The curve and the two borders of its band must lie inside the domain of
+/// the interpolated image, `[0, width - 1] x [0, height - 1]`.
+fn check_inside(curve: &SplineCurve, half_width: f64, width: usize, height: usize) -> Result<()> {
+    let (w, h) = (width as f64 - 1.0, height as f64 - 1.0);
+    let inside = |p: [f64; 2]| p[0] >= 0.0 && p[1] >= 0.0 && p[0] <= w && p[1] <= h;
+    let count = (curve.param_length().ceil() as usize).max(8);
+    let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
+    for &u in &params {
+        let f = curve.frame(u);
+        if !inside(f.point) {
+            return Err(Error::CurveOutsideImage {
+                x: f.point[0],
+                y: f.point[1],
+                width,
+                height,
+            });
+        }
+    }
+    for &u in &params {
+        let f = curve.frame(u);
+        for side in [-1.0, 1.0] {
+            // On the concave side the band stops before the centre of curvature.
+            let mut r = side * half_width;
+            if f.curvature * r > 0.0 {
+                r = r.signum() * r.abs().min((1.0 - MIN_JACOBIAN) / f.curvature.abs());
+            }
+            let q = [f.point[0] + r * f.normal[0], f.point[1] + r * f.normal[1]];
+            if !inside(q) {
+                return Err(Error::BandOutsideImage {
+                    half_width,
+                    x: q[0],
+                    y: q[1],
+                });
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,163 @@
+//! What a measurement returns.
+
+use crate::curve::{SplineCurve, SplineCurveData};
+use serde::{Deserialize, Serialize};
+
+/// Why a fit stopped without converging.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum Divergence {
+    /// The displaced curve or its band left the image near this point.
+    LeftImage {
+        /// x (column), pixels.
+        x: f64,
+        /// y (row), pixels.
+        y: f64,
+    },
+    /// The band holds no contrast: no edge or line within `R` of the curve.
+    NoContrast,
+    /// NaN or infinity appeared in the unknowns.
+    NonFinite,
+    /// The normal matrix of a new reference is singular (an element sees no
+    /// image gradient), or the new reference is degenerate.
+    Degenerate,
+}
+
+impl std::fmt::Display for Divergence {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Divergence::LeftImage { x, y } => write!(f, "the curve left the image near ({x:.1}, {y:.1})"),
+            Divergence::NoContrast => f.write_str("the band sees no contrast (no edge or line within R of the curve)"),
+            Divergence::NonFinite => f.write_str("the unknowns became NaN or infinite"),
+            Divergence::Degenerate => f.write_str("the curve became degenerate (an element sees no gradient)"),
+        }
+    }
+}
+
+/// How a fit (or one stage of it) ended.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum Outcome {
+    /// `max |dLambda|` fell under the tolerance.
+    Converged,
+    /// The iteration limit was reached first; the curve is the last iterate.
+    IterationLimit,
+    /// The fit failed; the curve is the last good one.
+    Diverged {
+        /// Why.
+        #[serde(flatten)]
+        divergence: Divergence,
+    },
+}
+
+impl Outcome {
+    /// Whether the outcome is [`Outcome::Converged`].
+    pub fn is_converged(&self) -> bool {
+        matches!(self, Outcome::Converged)
+    }
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Converged => f.write_str("converged"),
+            Outcome::IterationLimit => f.write_str("iteration limit reached"),
+            Outcome::Diverged { divergence } => write!(f, "diverged: {divergence}"),
+        }
+    }
+}
+
+/// The history of one stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageReport {
+    /// Band half-width `R`, pixels.
+    pub half_width: f64,
+    /// Number of elements of the displacement basis.
+    pub elements: usize,
+    /// Gauss–Newton iterations (all references of the stage).
+    pub iterations: usize,
+    /// How many times the reference was moved within the stage.
+    pub rereferences: usize,
+    /// Band pixels of the last reference.
+    pub band_pixels: usize,
+    /// RMS of the residual `g - f` at the last iteration, gray levels.
+    pub residual_rms: f64,
+    /// Dark level `a` of the virtual image at the end of the stage.
+    pub a: f64,
+    /// Contrast `c` (its sign is the polarity).
+    pub c: f64,
+    /// Wall-clock time of the stage, seconds.
+    pub seconds: f64,
+    /// How the stage ended.
+    pub outcome: Outcome,
+}
+
+/// One sample of the measured curve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sample {
+    /// Arc length from the start of the measured curve, pixels.
+    pub s: f64,
+    /// x (column), pixels.
+    pub x: f64,
+    /// y (row), pixels.
+    pub y: f64,
+    /// Unit normal x component (outward for closed curves).
+    pub nx: f64,
+    /// Unit normal y component.
+    pub ny: f64,
+    /// Standard deviation of the position along the normal from the
+    /// Gauss–Newton covariance of the last stage, pixels (noise only: it
+    /// does not include model bias).
+    pub sigma: f64,
+}
+
+/// The result of [`crate::fit::measure`].
+#[derive(Clone, Debug)]
+pub struct Measurement {
+    /// How the fit ended (that of the last stage run).
+    pub outcome: Outcome,
+    /// The measured curve as a B-spline (cubic or of the fit's degree if
+    /// higher), fitted to the samples.
+    pub curve: SplineCurve,
+    /// Largest distance between the B-spline and the samples, pixels.
+    pub curve_fit_error: f64,
+    /// Dense samples of the measured curve, at most the configured spacing
+    /// apart.
+    pub samples: Vec<Sample>,
+    /// Per-stage history.
+    pub stages: Vec<StageReport>,
+    /// Stages of the default schedule that were skipped, with the reason.
+    pub skipped: Vec<String>,
+}
+
+impl Measurement {
+    /// Total Gauss–Newton iterations over all stages.
+    pub fn iterations(&self) -> usize {
+        self.stages.iter().map(|s| s.iterations).sum()
+    }
+
+    /// Residual RMS of the last stage, gray levels.
+    pub fn residual_rms(&self) -> f64 {
+        self.stages.last().map_or(f64::NAN, |s| s.residual_rms)
+    }
+
+    /// Arc length of the measured curve, pixels.
+    pub fn length(&self) -> f64 {
+        self.curve.arc_length()
+    }
+
+    /// Area enclosed by a closed measured curve, square pixels.
+    pub fn area(&self) -> Option<f64> {
+        self.curve.area()
+    }
+
+    /// `[x, y]` of the samples.
+    pub fn points(&self) -> Vec<[f64; 2]> {
+        self.samples.iter().map(|s| [s.x, s.y]).collect()
+    }
+
+    /// The B-spline as serialisable data.
+    pub fn curve_data(&self) -> SplineCurveData {
+        self.curve.to_data()
+    }
+}

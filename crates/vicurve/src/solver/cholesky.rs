@@ -1,0 +1,238 @@
+//! Cholesky factorisation of symmetric (cyclic) banded matrices.
+
+use super::band::{Layout, SymBandMatrix};
+use super::{pivot_ok, pivot_threshold};
+use crate::error::{Error, Result};
+
+/// The Cholesky factor `L` (lower triangular, `M = L L^T`) of a
+/// [`SymBandMatrix`].
+///
+/// Shape of `L`, which is also the shape Cholesky fill-in produces (fill-in
+/// never leaves a row's envelope, from its first non-zero column to the
+/// diagonal):
+/// - open matrix: banded like `M`, rows `0..n` keep `q + 1` entries;
+/// - cyclic matrix (`n > 2 p + 1`): rows `0..n - p` are banded; the last `p`
+///   rows hold the corner entries, which start at column 0, so they are
+///   stored in full (an "arrow"). Time `O(n p^2)`, memory `O(n p)`;
+/// - tiny cyclic matrix (`n <= 2 p + 1`): every row is stored in full (a
+///   dense factorisation of at most `(2 p + 1)^2` entries).
+///
+/// Indices `0..m` are the banded rows and `m..n` the full rows.
+#[derive(Clone, Debug)]
+pub struct BandCholesky {
+    n: usize,
+    /// Half-bandwidth of the banded rows.
+    q: usize,
+    /// Number of banded rows.
+    m: usize,
+    /// `band[i * (q + 1) + d] = L[i][i - d]` for `i < m`, `d <= min(i, q)`.
+    band: Vec<f64>,
+    /// Full rows `i = m..n`: `L[i][0..=i]` starts at `row_offset(i)`.
+    arrow: Vec<f64>,
+}
+
+impl BandCholesky {
+    /// Factors `M = L L^T`.
+    ///
+    /// Errors: [`Error::NotPositiveDefinite`] with the index of the first
+    /// pivot that is not finite or not above
+    /// [`PIVOT_RTOL`](super::PIVOT_RTOL) times the largest diagonal entry
+    /// (or of the first non-finite diagonal entry): the matrix is not
+    /// positive definite, or is singular to working precision.
+    pub fn factor(mat: &SymBandMatrix) -> Result<Self> {
+        let n = mat.n();
+        let (q, m) = match mat.layout() {
+            Layout::Band { q } if mat.is_cyclic() => (q, n - q),
+            Layout::Band { q } => (q, n),
+            Layout::Dense => (0, 0),
+        };
+        let threshold = pivot_threshold((0..n).map(|i| mat.get(i, i)))
+            .map_err(|index| Error::NotPositiveDefinite { index })?;
+        let w = q + 1;
+        let not_pd = |index| Error::NotPositiveDefinite { index };
+
+        // Banded rows: L[i][j] for j in [i - q, i]; the dot product only
+        // runs over the columns both rows i and j share.
+        let mut band = vec![0.0; m * w];
+        for i in 0..m {
+            let lo = i.saturating_sub(q);
+            for j in lo..=i {
+                let mut s = mat.get(i, j);
+                for k in lo..j {
+                    s -= band[i * w + i - k] * band[j * w + j - k];
+                }
+                if j < i {
+                    band[i * w + i - j] = s / band[j * w];
+                } else if pivot_ok(s, threshold) {
+                    band[i * w] = s.sqrt();
+                } else {
+                    return Err(not_pd(i));
+                }
+            }
+        }
+
+        // Full rows: against a banded row j only its q + 1 entries count;
+        // against an earlier full row, all columns.
+        let mut arrow = vec![0.0; row_offset(m, n)];
+        for i in m..n {
+            let (done, rest) = arrow.split_at_mut(row_offset(m, i));
+            let row = &mut rest[..=i];
+            for j in 0..=i {
+                let mut s = mat.get(i, j);
+                if j < m {
+                    for k in j.saturating_sub(q)..j {
+                        s -= row[k] * band[j * w + j - k];
+                    }
+                    row[j] = s / band[j * w];
+                } else {
+                    let oj = row_offset(m, j);
+                    if j < i {
+                        let rj = &done[oj..=oj + j];
+                        s -= dot(&row[..j], &rj[..j]);
+                        row[j] = s / rj[j];
+                    } else {
+                        s -= dot(&row[..j], &row[..j]);
+                        if !pivot_ok(s, threshold) {
+                            return Err(not_pd(i));
+                        }
+                        row[i] = s.sqrt();
+                    }
+                }
+            }
+        }
+        Ok(BandCholesky {
+            n,
+            q,
+            m,
+            band,
+            arrow,
+        })
+    }
+
+    /// Size `n` of the factored matrix.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Row `i >= m` of `L`, columns `0..=i`.
+    #[inline]
+    fn full_row(&self, i: usize) -> &[f64] {
+        let o = row_offset(self.m, i);
+        &self.arrow[o..=o + i]
+    }
+
+    /// Forward substitution `L y = b` in place over rows `start..n`, assuming
+    /// `b[..start]` is (and stays) zero.
+    fn forward(&self, b: &mut [f64], start: usize) {
+        let w = self.q + 1;
+        for i in start..self.m {
+            // The band row holds L[i][i - d] at d: walk b backwards from i.
+            let lo = i.saturating_sub(self.q).max(start);
+            let row = &self.band[i * w..=i * w + (i - lo)];
+            let s: f64 = row[1..]
+                .iter()
+                .zip(b[lo..i].iter().rev())
+                .map(|(l, x)| l * x)
+                .sum();
+            b[i] = (b[i] - s) / row[0];
+        }
+        for i in start.max(self.m)..self.n {
+            let row = self.full_row(i);
+            b[i] = (b[i] - dot(&row[start..i], &b[start..i])) / row[i];
+        }
+    }
+
+    /// Solves `M x = b` in place (`b` becomes `x`) without allocating, in
+    /// `O(n p)`.
+    ///
+    /// Panics if `b.len() != n` (a programming error).
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        assert_eq!(
+            b.len(),
+            self.n,
+            "solve_in_place: wrong right-hand side length"
+        );
+        self.forward(b, 0);
+        // Backward substitution L^T x = y, row by row of L: once x[i] is
+        // known, remove its contribution L[i][k] x[i] from the earlier rows.
+        for i in (self.m..self.n).rev() {
+            let row = self.full_row(i);
+            b[i] /= row[i];
+            let xi = b[i];
+            for (bk, l) in b[..i].iter_mut().zip(&row[..i]) {
+                *bk -= l * xi;
+            }
+        }
+        let w = self.q + 1;
+        for i in (0..self.m).rev() {
+            let lo = i.saturating_sub(self.q);
+            let row = &self.band[i * w..=i * w + (i - lo)];
+            b[i] /= row[0];
+            let xi = b[i];
+            for (bk, l) in b[lo..i].iter_mut().rev().zip(&row[1..]) {
+                *bk -= l * xi;
+            }
+        }
+    }
+
+    /// `x^T M^{-1} x` for the vector `x` that is zero except
+    /// `x[(first + k) mod n] += values[k]` for `k = 0..values.len()` — the
+    /// `p + 1` B-spline basis values at a curve point, so that the variance of
+    /// the curve position there is `sigma^2 * N^T M^{-1} N`. Indices that wrap
+    /// onto the same entry (tiny cyclic matrices) add up.
+    ///
+    /// Computed as `|L^{-1} x|^2` with a forward substitution that starts at
+    /// the first non-zero entry: `O(n p)`, no allocation. `scratch` is a
+    /// work buffer of length at least `n` whose content is overwritten.
+    /// Panics if `scratch.len() < n`.
+    pub fn inverse_quadratic_form(&self, first: usize, values: &[f64], scratch: &mut [f64]) -> f64 {
+        let n = self.n;
+        assert!(
+            scratch.len() >= n,
+            "inverse_quadratic_form: scratch is shorter than n"
+        );
+        let y = &mut scratch[..n];
+        y.fill(0.0);
+        let mut start = n;
+        let first = first % n;
+        for (k, &v) in values.iter().enumerate() {
+            let idx = (first + k) % n;
+            y[idx] += v;
+            start = start.min(idx);
+        }
+        if start == n {
+            return 0.0;
+        }
+        self.forward(y, start);
+        y[start..].iter().map(|v| v * v).sum()
+    }
+
+    /// The factor `L` as a dense row-major `n x n` lower triangular matrix.
+    /// For tests and debugging: `O(n^2)` memory.
+    pub fn to_dense_factor(&self) -> Vec<f64> {
+        let n = self.n;
+        let w = self.q + 1;
+        let mut out = vec![0.0; n * n];
+        for i in 0..self.m {
+            for k in i.saturating_sub(self.q)..=i {
+                out[i * n + k] = self.band[i * w + i - k];
+            }
+        }
+        for i in self.m..self.n {
+            out[i * n..=i * n + i].copy_from_slice(self.full_row(i));
+        }
+        out
+    }
+}
+
+/// Offset of full row `i` in the arrow storage, whose first full row is `m`:
+/// rows `m..i` hold `m + 1, m + 2, ..., i` entries.
+#[inline]
+fn row_offset(m: usize, i: usize) -> usize {
+    (i * (i + 1) - m * (m + 1)) / 2
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

@@ -1,0 +1,101 @@
+//! The virtual image: the gray-level profile across the curve.
+//!
+//! Around a reference curve, a point at signed distance `r` (pixels, positive
+//! on the normal's side, i.e. outside a closed curve) has the virtual gray
+//! level `g = a + c * gamma(r / R)` inside the band `|r| < R`:
+//!
+//! * [`Kind::Silhouette`]: `gamma_s(rho) = (1 - sin(pi rho / 2)) / 2`, a
+//!   smooth step from 1 at `rho = -1` (inside) to 0 at `rho = 1`, so `c > 0`
+//!   means *bright inside* (bright on the left of the direction of travel as
+//!   seen on screen for open curves);
+//! * [`Kind::Contour`]: `gamma_c(rho) = (1 + cos(pi rho)) / 2`, a bell that is
+//!   1 on the curve, so `c > 0` means a *bright line on a dark ground*.
+//!
+//! The dark level `a` and the contrast `c` are estimated by the fit; the sign
+//! of `c` is the polarity.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// What is measured: a thin line or an edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// The boundary between a dark and a bright region (a step across it).
+    #[default]
+    Silhouette,
+    /// A thin line: a bell across it, the curve is its axis.
+    Contour,
+}
+
+impl Kind {
+    /// `gamma(rho)` for `|rho| <= 1` (clamped outside).
+    #[inline]
+    pub fn gamma(self, rho: f64) -> f64 {
+        let rho = rho.clamp(-1.0, 1.0);
+        match self {
+            Kind::Silhouette => 0.5 * (1.0 - (FRAC_PI_2 * rho).sin()),
+            Kind::Contour => 0.5 * (1.0 + (PI * rho).cos()),
+        }
+    }
+
+    /// `d gamma / d rho` for `|rho| < 1`, 0 outside.
+    #[inline]
+    pub fn gamma_prime(self, rho: f64) -> f64 {
+        if rho.abs() >= 1.0 {
+            return 0.0;
+        }
+        match self {
+            Kind::Silhouette => -0.25 * PI * (FRAC_PI_2 * rho).cos(),
+            Kind::Contour => -0.5 * PI * (PI * rho).sin(),
+        }
+    }
+}
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Kind::Silhouette => "silhouette",
+            Kind::Contour => "contour",
+        })
+    }
+}
+
+impl std::str::FromStr for Kind {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "silhouette" | "edge" => Ok(Kind::Silhouette),
+            "contour" | "line" => Ok(Kind::Contour),
+            _ => Err(crate::Error::invalid(
+                "kind",
+                format!("'{s}' (expected 'silhouette' or 'contour')"),
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn derivative_matches_finite_difference() {
+        for kind in [Kind::Silhouette, Kind::Contour] {
+            for i in -9..=9 {
+                let rho = i as f64 / 10.0;
+                let h = 1e-6;
+                let fd = (kind.gamma(rho + h) - kind.gamma(rho - h)) / (2.0 * h);
+                assert!((fd - kind.gamma_prime(rho)).abs() < 1e-8, "{kind} {rho}");
+            }
+        }
+    }
+
+    #[test]
+    fn profile_ends() {
+        assert_eq!(Kind::Silhouette.gamma(-1.0), 1.0);
+        assert!(Kind::Silhouette.gamma(1.0).abs() < 1e-16);
+        assert_eq!(Kind::Contour.gamma(0.0), 1.0);
+        assert!(Kind::Contour.gamma(1.0).abs() < 1e-16);
+    }
+}
