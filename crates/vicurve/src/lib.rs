@@ -16,7 +16,9 @@ pub mod image;
 pub mod interp;
 pub mod io;
 pub mod solver;
+pub mod render;
 pub mod spline;
+pub mod truth;
 pub mod virtual_image;
 
 pub use error::{Error, Result};

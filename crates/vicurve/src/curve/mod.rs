@@ -22,7 +22,7 @@ pub use init::InitialCurve;
 
 use crate::error::{Error, Result};
 use crate::solver::{BandCholesky, SymBandMatrix};
-use crate::spline::{Basis, MAX_DEGREE};
+use crate::spline::{cardinal_polynomials, Basis, MAX_DEGREE};
 use serde::{Deserialize, Serialize};
 
 /// Position, unit tangent and normal, curvature and speed at a parameter.
@@ -45,6 +45,10 @@ pub struct Frame {
 pub struct SplineCurve {
     basis: Basis,
     ctrl: Vec<[f64; 2]>,
+    /// Per element, the power-basis coefficients of x and y in the local
+    /// coordinate `t` in `[0, 1]`: evaluation is one Horner pass, which
+    /// makes the projection of ~1e5 band pixels cheap.
+    poly: Vec<[[f64; MAX_DEGREE + 1]; 2]>,
 }
 
 /// The serialisable description of a [`SplineCurve`] for result files.
@@ -78,7 +82,22 @@ impl SplineCurve {
                 what: "curve control points".into(),
             });
         }
-        Ok(SplineCurve { basis, ctrl })
+        let p = basis.degree();
+        let pieces = cardinal_polynomials(p);
+        let poly = (0..basis.n_elements())
+            .map(|e| {
+                let mut c = [[0.0; MAX_DEGREE + 1]; 2];
+                for (k, piece) in pieces.iter().enumerate().take(p + 1) {
+                    let q = ctrl[basis.index(e, k)];
+                    for m in 0..=p {
+                        c[0][m] += q[0] * piece[m];
+                        c[1][m] += q[1] * piece[m];
+                    }
+                }
+                c
+            })
+            .collect();
+        Ok(SplineCurve { basis, ctrl, poly })
     }
 
     /// Least-squares B-spline curve of `degree` through dense samples of a
@@ -200,28 +219,26 @@ impl SplineCurve {
     /// The point `C(u)`.
     #[inline]
     pub fn point(&self, u: f64) -> [f64; 2] {
-        let mut v = [0.0; MAX_DEGREE + 1];
-        let first = self.basis.eval(u, &mut v);
-        let mut out = [0.0; 2];
-        for (k, vk) in v.iter().enumerate().take(self.basis.degree() + 1) {
-            let c = self.ctrl[self.basis.index(first, k)];
-            out[0] += vk * c[0];
-            out[1] += vk * c[1];
-        }
-        out
+        self.derivatives(u)[0]
     }
 
-    /// `C(u)`, `C'(u)` and `C''(u)`.
+    /// `C(u)`, `C'(u)` and `C''(u)` (Horner on the element's polynomial).
     #[inline]
     pub fn derivatives(&self, u: f64) -> [[f64; 2]; 3] {
-        let bv = self.basis.eval_derivs(u);
+        let (e, t) = self.basis.locate(u);
+        let p = self.basis.degree();
+        let inv_h = 1.0 / self.basis.element_length();
         let mut out = [[0.0; 2]; 3];
-        for k in 0..=self.basis.degree() {
-            let c = self.ctrl[self.basis.index(bv.first, k)];
-            for (d, w) in [bv.value[k], bv.d1[k], bv.d2[k]].into_iter().enumerate() {
-                out[d][0] += w * c[0];
-                out[d][1] += w * c[1];
+        for (axis, c) in self.poly[e].iter().enumerate() {
+            let (mut v, mut d1, mut d2) = (c[p], 0.0, 0.0);
+            for m in (0..p).rev() {
+                d2 = d2 * t + 2.0 * d1;
+                d1 = d1 * t + v;
+                v = v * t + c[m];
             }
+            out[0][axis] = v;
+            out[1][axis] = d1 * inv_h;
+            out[2][axis] = d2 * inv_h * inv_h;
         }
         out
     }

@@ -1,5 +1,8 @@
 //! The Gauss–Newton system of one reference curve.
 //!
+//! Every sum below runs over the band pixels with the weight
+//! `w = 1 / (1 - kappa r)` of [`Band`] (left out of the formulas).
+//!
 //! With `g = a + c gamma(r / R)` and the gradient of the physical image `f`
 //! replaced by that of `g`, the normal matrix is `c^2 M0` with
 //!
@@ -84,7 +87,9 @@ pub(crate) struct Correlation {
     y2: Vec<f64>,
     /// `K^-1`, row-major 2 x 2.
     k_inv: [f64; 4],
+    /// Sum of the weights (about the number of pixels).
     count: f64,
+    pixels: f64,
     sum_g: f64,
     sum_gg: f64,
     acc: Vec<Accumulator>,
@@ -92,6 +97,9 @@ pub(crate) struct Correlation {
     pub delta: Vec<f64>,
     /// The last residual sum of squares.
     pub ssr: f64,
+    /// Pure-noise variance of the gray levels, once estimated
+    /// ([`Correlation::estimate_noise`]).
+    pub noise_var: Option<f64>,
 }
 
 impl Correlation {
@@ -108,19 +116,21 @@ impl Correlation {
         let mut m = SymBandMatrix::zeros(n, p, basis.is_closed())?;
         let mut g1 = vec![0.0; n];
         let mut g2 = vec![0.0; n];
-        let (mut sum_g, mut sum_gg) = (0.0, 0.0);
+        let (mut sum_w, mut sum_g, mut sum_gg) = (0.0, 0.0, 0.0);
         for i in 0..band.len() {
             let first = band.first[i] as usize;
             let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+            let w = band.weight[i];
             let dg = band.dgamma[i];
             let g = band.gamma[i];
-            sum_g += g;
-            sum_gg += g * g;
+            sum_w += w;
+            sum_g += w * g;
+            sum_gg += w * g * g;
             for a in 0..=p {
                 let ia = basis.index(first, a);
-                g1[ia] += dg * vals[a];
-                g2[ia] += g * dg * vals[a];
-                let wa = dg * dg * vals[a];
+                g1[ia] += w * dg * vals[a];
+                g2[ia] += w * g * dg * vals[a];
+                let wa = w * dg * dg * vals[a];
                 for (b, vb) in vals.iter().enumerate().skip(a) {
                     m.add(ia, basis.index(first, b), wa * vb);
                 }
@@ -132,7 +142,7 @@ impl Correlation {
         chol.solve_in_place(&mut y1);
         chol.solve_in_place(&mut y2);
         let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
-        let count = band.len() as f64;
+        let count = sum_w;
         let k = [
             count - dot(&g1, &y1),
             sum_g - dot(&g1, &y2),
@@ -160,6 +170,7 @@ impl Correlation {
             .collect();
         Ok(Correlation {
             count,
+            pixels: band.len() as f64,
             y1,
             y2,
             k_inv,
@@ -173,6 +184,7 @@ impl Correlation {
             acc,
             delta: vec![0.0; n],
             ssr: 0.0,
+            noise_var: None,
         })
     }
 
@@ -212,13 +224,14 @@ impl Correlation {
                     acc.outside = Some([xd, yd]);
                     return;
                 };
-                let w = f * band.dgamma[i];
+                let wf = band.weight[i] * f;
+                let proj = wf * band.dgamma[i];
                 for (k, v) in vals.iter().enumerate() {
-                    acc.f_proj[basis.index(first, k)] += w * v;
+                    acc.f_proj[basis.index(first, k)] += proj * v;
                 }
-                acc.sum_f += f;
-                acc.sum_fg += f * band.gamma[i];
-                acc.sum_ff += f * f;
+                acc.sum_f += wf;
+                acc.sum_fg += wf * band.gamma[i];
+                acc.sum_ff += wf * f;
             }
         });
         if let Some(q) = self.acc.iter().find_map(|a| a.outside) {
@@ -288,14 +301,55 @@ impl Correlation {
         })
     }
 
+    /// Estimate the variance of the image noise from the residuals at
+    /// `lambda` (after convergence), and keep it for [`Self::position_sigma`].
+    ///
+    /// The residual `g - f` holds the noise and, where the physical profile
+    /// differs from the virtual one, a systematic part that is a smooth
+    /// function of `r`: sorted by `r`, neighbouring pixels share the
+    /// systematic part, so half the mean squared difference of consecutive
+    /// residuals estimates the noise variance alone (Rice's difference
+    /// estimator). Allocates: call it once per stage, not per iteration.
+    pub fn estimate_noise(&mut self, lambda: &[f64], sampler: &Sampler, a: f64, c: f64) -> Option<f64> {
+        let band = &self.band;
+        let p = self.basis.degree();
+        let mut res: Vec<(f64, f64)> = Vec::with_capacity(band.len());
+        for i in 0..band.len() {
+            let first = band.first[i] as usize;
+            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+            let u: f64 = vals
+                .iter()
+                .enumerate()
+                .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
+                .sum();
+            let [x, y] = band.pos[i];
+            let [nx, ny] = band.normal[i];
+            let f = sampler.value(x + u * nx, y + u * ny)?;
+            res.push((band.r[i], a + c * band.gamma[i] - f));
+        }
+        if res.len() < 3 {
+            return None;
+        }
+        res.sort_by(|l, r| l.0.total_cmp(&r.0));
+        let sum: f64 = res.windows(2).map(|w| (w[1].1 - w[0].1).powi(2)).sum();
+        let var = sum / (2.0 * (res.len() - 1) as f64);
+        self.noise_var = Some(var);
+        Some(var)
+    }
+
     /// Standard deviation of the normal position `U(s)` at `s`, pixels:
     /// `var U = N^T Cov(Lambda) N` with `Cov(Lambda) = sigma^2 / c^2
     /// (M0 - B S^-1 B^T)^-1` (the gray levels estimated jointly) and
-    /// `sigma^2` the residual variance per pixel (method, section 8).
+    /// `sigma^2` the noise variance per pixel (method, section 8): the
+    /// pure-noise estimate when [`Self::estimate_noise`] has run, else the
+    /// residual variance (an upper bound: it includes profile mismatch).
     /// `scratch` has one entry per unknown.
     pub fn position_sigma(&self, s: f64, c: f64, scratch: &mut [f64]) -> f64 {
-        let dof = (self.count - self.n_unknowns() as f64 - 2.0).max(1.0);
-        let sigma2 = self.ssr / dof;
+        let sigma2 = self.noise_var.unwrap_or_else(|| {
+            // ssr is weighted; scale it back to a per-pixel variance.
+            let dof = (self.pixels - self.n_unknowns() as f64 - 2.0).max(1.0);
+            self.ssr / dof * (self.pixels / self.count)
+        });
         let mut v = [0.0; crate::spline::MAX_DEGREE + 1];
         let first = self.basis.eval(s, &mut v);
         let vals = &v[..=self.basis.degree()];

@@ -1,0 +1,438 @@
+//! Ground truth: curves whose geometry is known exactly, the signed distance
+//! of measured points to them, and the truth file written next to a synthetic
+//! image.
+//!
+//! # Conventions
+//! Coordinates are pixels (`x` = column, `y` = row, y pointing down on
+//! screen). Every shape is a parametric curve `p(s)`:
+//! - closed shapes run counterclockwise *as seen on screen* for `s` in
+//!   `[0, 2π)`, so the unit normal `n = (-t_y, t_x)` of the unit tangent `t`
+//!   points outward;
+//! - the open [`Shape::Sine`] is travelled in `+x` (its parameter is `x`), so
+//!   `n` points to `+y` (down on screen).
+//!
+//! Signed distances are positive on the `+n` side: outside closed shapes,
+//! below (larger `y`) the sine.
+//!
+//! Closest points are exact to rounding: a coarse sampling of the parameter
+//! brackets every local minimum of the distance, each is refined by a
+//! safeguarded Newton iteration, and the global minimum is kept (so the
+//! concave parts of a star are handled).
+
+mod geometry;
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::render::{Method, RenderSpec};
+
+pub use crate::virtual_image::Kind;
+
+/// A curve of exactly known geometry. All lengths are in pixels, angles in
+/// radians; see the [module documentation](self) for the orientation.
+///
+/// Serialised with a `"shape"` tag, e.g.
+/// `{"shape": "circle", "cx": 100.0, "cy": 80.0, "r": 40.0}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case")]
+pub enum Shape {
+    /// Circle of centre `(cx, cy)` and radius `r > 0`:
+    /// `p(s) = (cx + r cos s, cy - r sin s)`.
+    Circle {
+        /// Centre, x (column), px.
+        cx: f64,
+        /// Centre, y (row), px.
+        cy: f64,
+        /// Radius, px.
+        r: f64,
+    },
+    /// Ellipse of centre `(cx, cy)`, semi-axes `a, b > 0`, the `a` axis at
+    /// `angle` radians from `+x`, counterclockwise on screen (towards `-y`).
+    /// The parameter `s` is the eccentric anomaly.
+    Ellipse {
+        /// Centre, x (column), px.
+        cx: f64,
+        /// Centre, y (row), px.
+        cy: f64,
+        /// Semi-axis along the direction `angle`, px.
+        a: f64,
+        /// The other semi-axis, px.
+        b: f64,
+        /// Direction of the `a` axis from `+x`, counterclockwise on screen, rad.
+        angle: f64,
+    },
+    /// Star: in polar coordinates about `(cx, cy)`,
+    /// `r(θ) = r0 (1 + amplitude cos(lobes θ + phase))`, `θ` counterclockwise
+    /// on screen from `+x`, i.e. `p(θ) = (cx + r cos θ, cy - r sin θ)`.
+    /// Concave parts are allowed.
+    Star {
+        /// Centre, x (column), px.
+        cx: f64,
+        /// Centre, y (row), px.
+        cy: f64,
+        /// Mean radius, px, `> 0`.
+        r0: f64,
+        /// Relative amplitude, `|amplitude| < 1`.
+        amplitude: f64,
+        /// Number of lobes, `>= 1`.
+        lobes: u32,
+        /// Phase, rad.
+        phase: f64,
+    },
+    /// Open curve `y = y0 + amplitude sin(2π x / wavelength + phase)` for `x`
+    /// in `[x_min, x_max]`, travelled in `+x` (parameter `s = x`).
+    ///
+    /// `x_min..x_max` is the part that is *measured* ([`Shape::polyline`],
+    /// [`Shape::length`]); images draw the infinite sine across the whole
+    /// image, and [`Shape::signed_distance`] is the distance to the infinite
+    /// sine (also for points whose closest point lies beyond `x_min` or
+    /// `x_max`), so that there is no end effect.
+    Sine {
+        /// Mean ordinate, px.
+        y0: f64,
+        /// Amplitude, px (any sign; 0 is a horizontal line).
+        amplitude: f64,
+        /// Wavelength, px, `> 0`.
+        wavelength: f64,
+        /// Phase, rad.
+        phase: f64,
+        /// Start of the measured part, px.
+        x_min: f64,
+        /// End of the measured part, px, `> x_min`.
+        x_max: f64,
+    },
+}
+
+impl Shape {
+    /// Check the parameters: all finite, radii, semi-axes, wavelength `> 0`,
+    /// `|amplitude| < 1` and `1 <= lobes <= 10000` for a star (which makes it
+    /// star-shaped about its centre, with a smooth boundary of finite
+    /// curvature), `x_min < x_max` for a sine.
+    ///
+    /// Errors: [`Error::InvalidParameter`] naming the parameter.
+    pub fn validate(&self) -> Result<()> {
+        fn finite(name: &'static str, v: f64) -> Result<()> {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::invalid(name, format!("{v} is not a finite number")))
+            }
+        }
+        fn positive(name: &'static str, v: f64) -> Result<()> {
+            finite(name, v)?;
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(name, format!("{v} must be > 0 px")))
+            }
+        }
+        match *self {
+            Shape::Circle { cx, cy, r } => {
+                finite("cx", cx)?;
+                finite("cy", cy)?;
+                positive("r", r)
+            }
+            Shape::Ellipse {
+                cx,
+                cy,
+                a,
+                b,
+                angle,
+            } => {
+                finite("cx", cx)?;
+                finite("cy", cy)?;
+                positive("a", a)?;
+                positive("b", b)?;
+                finite("angle", angle)
+            }
+            Shape::Star {
+                cx,
+                cy,
+                r0,
+                amplitude,
+                lobes,
+                phase,
+            } => {
+                finite("cx", cx)?;
+                finite("cy", cy)?;
+                positive("r0", r0)?;
+                finite("phase", phase)?;
+                finite("amplitude", amplitude)?;
+                if amplitude.abs() >= 1.0 {
+                    return Err(Error::invalid(
+                        "amplitude",
+                        format!(
+                            "{amplitude}: a star needs |amplitude| < 1 so that its radius stays > 0"
+                        ),
+                    ));
+                }
+                if !(1..=10_000).contains(&lobes) {
+                    return Err(Error::invalid(
+                        "lobes",
+                        format!("{lobes}: a star needs 1 to 10000 lobes (use a circle for 0)"),
+                    ));
+                }
+                Ok(())
+            }
+            Shape::Sine {
+                y0,
+                amplitude,
+                wavelength,
+                phase,
+                x_min,
+                x_max,
+            } => {
+                finite("y0", y0)?;
+                finite("amplitude", amplitude)?;
+                positive("wavelength", wavelength)?;
+                finite("phase", phase)?;
+                finite("x_min", x_min)?;
+                finite("x_max", x_max)?;
+                if x_min < x_max {
+                    Ok(())
+                } else {
+                    Err(Error::invalid(
+                        "x_max",
+                        format!("x_max ({x_max}) must be greater than x_min ({x_min})"),
+                    ))
+                }
+            }
+        }
+    }
+
+    /// Whether the curve is closed (every shape but [`Shape::Sine`]).
+    pub fn is_closed(&self) -> bool {
+        !matches!(self, Shape::Sine { .. })
+    }
+
+    /// Signed distance, px, from the point `(x, y)` to the curve: positive on
+    /// the `+n` side (outside closed shapes, larger `y` for the sine), zero
+    /// on the curve. Exact to rounding (about `1e-13` relative to the
+    /// coordinates). For the sine, the distance to the *infinite* sine.
+    ///
+    /// The shape must be valid ([`Shape::validate`]); NaN for a non-finite
+    /// point or an invalid shape.
+    pub fn signed_distance(&self, x: f64, y: f64) -> f64 {
+        let q = [x, y];
+        let s = self.closest_param(q);
+        let e = self.eval(s);
+        let d = [x - e.p[0], y - e.p[1]];
+        let dist = d[0].hypot(d[1]);
+        let n = e.normal();
+        if d[0] * n[0] + d[1] * n[1] < 0.0 {
+            -dist
+        } else {
+            dist
+        }
+    }
+
+    /// The point of the curve closest to `(x, y)` and the curve's unit
+    /// normal `n` there (outward for closed shapes, `+y`-ish for the sine),
+    /// px. When several points are equally close (the centre of a circle),
+    /// one of them. Same accuracy and preconditions as
+    /// [`Shape::signed_distance`].
+    pub fn closest_point(&self, x: f64, y: f64) -> ([f64; 2], [f64; 2]) {
+        let e = self.eval(self.closest_param([x, y]));
+        (e.p, e.normal())
+    }
+
+    /// Points along the curve in its orientation, evenly spaced in arc
+    /// length, consecutive points at most `max_step` px apart. Closed
+    /// shapes: starts at `s = 0`, the last point differs from the first (the
+    /// closing chord is also `<= max_step`). Sine: from `x_min` to `x_max`
+    /// included.
+    ///
+    /// Errors: [`Error::InvalidParameter`] when `max_step` is not a positive
+    /// finite number, would give more than 50 million points, or the shape is
+    /// invalid.
+    pub fn polyline(&self, max_step: f64) -> Result<Vec<[f64; 2]>> {
+        self.validate()?;
+        if !(max_step.is_finite() && max_step > 0.0) {
+            return Err(Error::invalid(
+                "max_step",
+                format!("{max_step} must be a positive number of pixels"),
+            ));
+        }
+        self.polyline_unchecked(max_step, 50_000_000)
+    }
+
+    /// Length of the curve, px (of the `x_min..x_max` part for the sine).
+    /// Numerical (composite Gauss-Legendre), relative accuracy about `1e-13`.
+    /// NaN for an invalid shape.
+    pub fn length(&self) -> f64 {
+        let (s0, s1) = self.param_span();
+        self.length_between(s0, s1)
+    }
+
+    /// Area enclosed by a closed shape, px² (exact closed form:
+    /// `π r²`, `π a b`, `π r0² (1 + amplitude²/2)` for a star); `None` for
+    /// the sine.
+    pub fn area(&self) -> Option<f64> {
+        match *self {
+            Shape::Circle { r, .. } => Some(PI * r * r),
+            Shape::Ellipse { a, b, .. } => Some(PI * a * b),
+            Shape::Star { r0, amplitude, .. } => {
+                Some(PI * r0 * r0 * (1.0 + 0.5 * amplitude * amplitude))
+            }
+            Shape::Sine { .. } => None,
+        }
+    }
+
+    /// Smallest absolute radius of curvature along the curve, px (for the
+    /// sine, along the infinite curve; `f64::INFINITY` for a straight line).
+    /// Closed forms except for the star (dense sampling refined by golden
+    /// section, relative accuracy about `1e-9`). A line drawn along the curve
+    /// must be narrower than twice this.
+    pub fn min_curvature_radius(&self) -> f64 {
+        match *self {
+            Shape::Circle { r, .. } => r,
+            Shape::Ellipse { a, b, .. } => a.min(b) * a.min(b) / a.max(b),
+            Shape::Sine {
+                amplitude,
+                wavelength,
+                ..
+            } => {
+                let w = 2.0 * PI / wavelength;
+                1.0 / (amplitude.abs() * w * w)
+            }
+            Shape::Star { .. } => geometry::star_min_curvature_radius(self),
+        }
+    }
+}
+
+/// Error statistics of measured points against a true curve, px.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorStats {
+    /// Number of points.
+    pub count: usize,
+    /// Mean signed distance (positive: on the `+n` side, outside), px.
+    pub bias: f64,
+    /// Root mean square of the signed distance about its mean, px.
+    pub scatter: f64,
+    /// Root mean square of the signed distance, px
+    /// (`rms² = bias² + scatter²`).
+    pub rms: f64,
+    /// Largest absolute distance, px.
+    pub max_abs: f64,
+}
+
+/// Statistics of the signed distances of `points` (px) to `shape`.
+///
+/// Errors: [`Error::InvalidParameter`] for no point or an invalid shape,
+/// [`Error::NonFinite`] for a NaN or infinite coordinate.
+pub fn evaluate(points: &[[f64; 2]], shape: &Shape) -> Result<ErrorStats> {
+    shape.validate()?;
+    if points.is_empty() {
+        return Err(Error::invalid("points", "no point to evaluate"));
+    }
+    if let Some(i) = points
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(Error::NonFinite {
+            what: format!("measured point {i}"),
+        });
+    }
+    let n = points.len() as f64;
+    let d: Vec<f64> = points
+        .iter()
+        .map(|p| shape.signed_distance(p[0], p[1]))
+        .collect();
+    let bias = d.iter().sum::<f64>() / n;
+    let scatter = (d.iter().map(|v| (v - bias) * (v - bias)).sum::<f64>() / n).sqrt();
+    let rms = (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let max_abs = d.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    Ok(ErrorStats {
+        count: points.len(),
+        bias,
+        scatter,
+        rms,
+        max_abs,
+    })
+}
+
+/// The ground truth of an image: the curve, its kind and, for synthetic
+/// images, how the image was rendered. Written as JSON next to the image.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// The true curve, px.
+    pub shape: Shape,
+    /// Silhouette (edge) or contour (thin line).
+    pub kind: Kind,
+    /// Full width of the line of a contour painted with exact coverage, px;
+    /// `None` otherwise (silhouettes, profile images whose width is set by
+    /// the profile half-width).
+    pub line_width: Option<f64>,
+    /// How the image was rendered, when it is synthetic.
+    pub image: Option<RenderSpec>,
+}
+
+impl Truth {
+    /// The truth of an image rendered from `spec`.
+    pub fn from_spec(spec: &RenderSpec) -> Truth {
+        Truth {
+            shape: spec.shape.clone(),
+            kind: spec.kind,
+            line_width: match (spec.kind, spec.method) {
+                (Kind::Contour, Method::Coverage) => Some(spec.line_width),
+                _ => None,
+            },
+            image: Some(spec.clone()),
+        }
+    }
+
+    /// Pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        // Serialising plain data with finite or non-finite floats cannot fail
+        // (serde_json writes non-finite floats as null).
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Parse the JSON written by [`Truth::to_json`] and validate the shape.
+    /// `what` names the source in error messages.
+    ///
+    /// Errors: [`Error::Parse`] for malformed JSON, [`Error::InvalidParameter`]
+    /// for an invalid shape.
+    pub fn from_json(text: &str, what: &str) -> Result<Truth> {
+        let t: Truth = serde_json::from_str(text).map_err(|e| Error::Parse {
+            what: what.to_string(),
+            line: e.line(),
+            reason: e.to_string(),
+        })?;
+        t.shape.validate()?;
+        Ok(t)
+    }
+
+    /// Write [`Truth::to_json`] to `path`.
+    ///
+    /// Errors: [`Error::Io`].
+    pub fn save(&self, path: &Path) -> Result<()> {
+        std::fs::write(path, self.to_json()).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Read a truth file written by [`Truth::save`].
+    ///
+    /// Errors: [`Error::NotFound`], [`Error::Io`], and those of
+    /// [`Truth::from_json`].
+    pub fn load(path: &Path) -> Result<Truth> {
+        let text = std::fs::read_to_string(path).map_err(|source| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                Error::NotFound {
+                    path: path.to_path_buf(),
+                }
+            } else {
+                Error::Io {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            }
+        })?;
+        Truth::from_json(&text, &path.display().to_string())
+    }
+}
