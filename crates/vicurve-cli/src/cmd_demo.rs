@@ -56,7 +56,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
         cy,
         r: 300.0,
     };
-    println!("2. measuring from a circle of radius 300 whose centre is 10 px off, default settings");
+    println!(
+        "2. measuring from a circle of radius 300 whose centre is 10 px off, default settings"
+    );
     let config = FitConfig::default();
     let started = Instant::now();
     let m = measure(&image, &init, &config)?;
@@ -64,7 +66,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
     print_summary(&config, &m);
     println!("time:        {:.1} ms", seconds * 1e3);
     let stats = evaluate(&m.points(), &truth.shape)?;
-    println!("3. accuracy against the exact star ({} points):", stats.count);
+    println!(
+        "3. accuracy against the exact star ({} points):",
+        stats.count
+    );
     println!("   bias    {:+.2e} px", stats.bias);
     println!("   scatter {:.2e} px", stats.scatter);
     println!("   max     {:.2e} px", stats.max_abs);
@@ -75,7 +80,17 @@ pub fn run(args: Args) -> Result<(), Failure> {
         png: Some(dir.join("overlay.png")),
         png_scale: 1,
     };
-    write_outputs(&outputs, &image_path.display().to_string(), &image, &init, &config, &m)?;
-    println!("4. wrote star.png, truth.json, result.json, points.csv, overlay.svg and overlay.png in {}", dir.display());
+    write_outputs(
+        &outputs,
+        &image_path.display().to_string(),
+        &image,
+        &init,
+        &config,
+        &m,
+    )?;
+    println!(
+        "4. wrote star.png, truth.json, result.json, points.csv, overlay.svg and overlay.png in {}",
+        dir.display()
+    );
     finish(&m)
 }

@@ -34,7 +34,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let truth = Truth::load(&args.truth)?;
     let stats = evaluate(&points, &truth.shape)?;
     println!("points:  {}", stats.count);
-    println!("bias:    {:+.3e} px (mean signed normal distance; + = outside / +n side)", stats.bias);
+    println!(
+        "bias:    {:+.3e} px (mean signed normal distance; + = outside / +n side)",
+        stats.bias
+    );
     println!("scatter: {:.3e} px (RMS about the mean)", stats.scatter);
     println!("max:     {:.3e} px (largest |distance|)", stats.max_abs);
     if let Some(p) = &args.json {

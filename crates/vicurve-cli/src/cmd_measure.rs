@@ -119,7 +119,9 @@ pub fn parse_init(spec: &str, closed: bool) -> Result<InitialCurve, Failure> {
         return Ok(InitialCurve::Polyline { points, closed });
     }
     if closed {
-        return Err(Failure::Error("--closed applies to polyline: starts only".into()));
+        return Err(Failure::Error(
+            "--closed applies to polyline: starts only".into(),
+        ));
     }
     Ok(spec.parse::<InitialCurve>()?)
 }
@@ -204,7 +206,11 @@ pub fn write_outputs(
 
 /// The initial curve (dashed blue), the final band's borders (thin yellow)
 /// and the measured curve (red).
-pub fn overlay_layers(init: &InitialCurve, config: &FitConfig, m: &Measurement) -> Result<Vec<Layer>, Failure> {
+pub fn overlay_layers(
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+) -> Result<Vec<Layer>, Failure> {
     let closed = m.curve.is_closed();
     let init_pts = init.dense_points(1.0)?;
     let r = m.stages.last().map_or(0.0, |s| s.half_width);
@@ -222,7 +228,10 @@ pub fn overlay_layers(init: &InitialCurve, config: &FitConfig, m: &Measurement) 
         style: style([40, 120, 255, 255], 1.0, Some([4.0, 3.0])),
     }];
     if r > 0.0 {
-        for (k, label) in [(-1.0, "band border (inner side)"), (1.0, "band border (outer side)")] {
+        for (k, label) in [
+            (-1.0, "band border (inner side)"),
+            (1.0, "band border (outer side)"),
+        ] {
             layers.push(Layer {
                 label: format!("{label}, R = {r} px"),
                 points: offset(k),
@@ -243,16 +252,31 @@ pub fn overlay_layers(init: &InitialCurve, config: &FitConfig, m: &Measurement) 
 pub fn print_summary(config: &FitConfig, m: &Measurement) {
     let c = m.stages.last().map_or(f64::NAN, |s| s.c);
     println!("outcome:     {}", m.outcome);
-    println!("iterations:  {} over {} stage(s)", m.iterations(), m.stages.len());
+    println!(
+        "iterations:  {} over {} stage(s)",
+        m.iterations(),
+        m.stages.len()
+    );
     println!("residual:    {:.3e} (RMS gray level)", m.residual_rms());
-    println!("polarity:    {}", polarity_text(config.kind, m.curve.is_closed(), c));
+    println!(
+        "polarity:    {}",
+        polarity_text(config.kind, m.curve.is_closed(), c)
+    );
     println!("length:      {:.4} px", m.length());
     if let Some(a) = m.area() {
         println!("area:        {:.4} px^2", a);
     }
-    let sig: Vec<f64> = m.samples.iter().map(|s| s.sigma).filter(|v| v.is_finite()).collect();
+    let sig: Vec<f64> = m
+        .samples
+        .iter()
+        .map(|s| s.sigma)
+        .filter(|v| v.is_finite())
+        .collect();
     if !sig.is_empty() {
         let mean = sig.iter().sum::<f64>() / sig.len() as f64;
-        println!("sigma:       {:.2e} px (mean noise uncertainty of the position)", mean);
+        println!(
+            "sigma:       {:.2e} px (mean noise uncertainty of the position)",
+            mean
+        );
     }
 }

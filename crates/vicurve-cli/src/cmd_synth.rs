@@ -131,11 +131,17 @@ fn numbers(what: &str, text: &str, sep: char, count: usize) -> Result<Vec<f64>, 
 /// The render specification described by the arguments.
 pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
     if a.bits != 8 && a.bits != 16 {
-        return Err(Failure::Error(format!("--bits {} (expected 8 or 16)", a.bits)));
+        return Err(Failure::Error(format!(
+            "--bits {} (expected 8 or 16)",
+            a.bits
+        )));
     }
     let size = numbers("size", &a.size, 'x', 2)?;
     if size.iter().any(|v| *v < 1.0 || v.fract() != 0.0) {
-        return Err(Failure::Error(format!("--size '{}': expected WIDTHxHEIGHT in whole pixels", a.size)));
+        return Err(Failure::Error(format!(
+            "--size '{}': expected WIDTHxHEIGHT in whole pixels",
+            a.size
+        )));
     }
     let (mut w, mut h) = (size[0], size[1]);
     if a.shape == ShapeName::PaperDisc {
@@ -207,7 +213,11 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         width: w as usize,
         height: h as usize,
         shape,
-        kind: if line.is_some() { Kind::Contour } else { Kind::Silhouette },
+        kind: if line.is_some() {
+            Kind::Contour
+        } else {
+            Kind::Silhouette
+        },
         line_width: line.unwrap_or(3.0),
         foreground,
         background,

@@ -18,7 +18,7 @@ use std::process::ExitCode;
 /// Sub-pixel measurement of contours (thin lines) and silhouettes (edges) in
 /// images by Virtual Image Correlation with B-splines.
 #[derive(Parser)]
-#[command(name = "vicurve", version, about, long_about = None)]
+#[command(name = "vicurve", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -113,7 +113,8 @@ pub fn polarity_text(kind: vicurve::virtual_image::Kind, closed: bool, c: f64) -
 
 /// Write any serialisable value as pretty JSON.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), String> {
-    let text = serde_json::to_string_pretty(value).map_err(|e| format!("cannot encode JSON for {}: {e}", path.display()))?;
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| format!("cannot encode JSON for {}: {e}", path.display()))?;
     std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 

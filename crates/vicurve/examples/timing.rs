@@ -16,14 +16,34 @@ fn main() {
         let t = Instant::now();
         let s = Sampler::new(&img, Interpolation::CubicBSpline);
         let t1 = t.elapsed();
-        let c = InitialCurve::Circle { cx: 256.0, cy: 256.0, r: 203.0 }.to_curve().unwrap();
+        let c = InitialCurve::Circle {
+            cx: 256.0,
+            cy: 256.0,
+            r: 203.0,
+        }
+        .to_curve()
+        .unwrap();
         let t2 = t.elapsed();
         let b = Basis::new(3, 25, c.param_length(), true).unwrap();
         let band = Band::build(&c, &b, 10.0, Kind::Silhouette, 512, 512).unwrap();
         let t3 = t.elapsed();
-        let cfg = FitConfig { stages: Some(vec![Stage { half_width: 10.0, elements: Elements::Count(25) }]), ..Default::default() };
+        let cfg = FitConfig {
+            stages: Some(vec![Stage {
+                half_width: 10.0,
+                elements: Elements::Count(25),
+            }]),
+            ..Default::default()
+        };
         let m = measure_from(&s, c.clone(), &cfg).unwrap();
         let t4 = t.elapsed();
-        println!("sampler {:?} curve {:?} band {:?} ({} px) measure_from {:?} it {}", t1, t2 - t1, t3 - t2, band.len(), t4 - t3, m.iterations());
+        println!(
+            "sampler {:?} curve {:?} band {:?} ({} px) measure_from {:?} it {}",
+            t1,
+            t2 - t1,
+            t3 - t2,
+            band.len(),
+            t4 - t3,
+            m.iterations()
+        );
     }
 }

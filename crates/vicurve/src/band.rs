@@ -94,7 +94,8 @@ impl Band {
             ));
         }
         let l = curve.param_length();
-        if (basis.length() - l).abs() > 1e-9 * l.max(1.0) || basis.is_closed() != curve.is_closed() {
+        if (basis.length() - l).abs() > 1e-9 * l.max(1.0) || basis.is_closed() != curve.is_closed()
+        {
             return Err(Error::invalid(
                 "displacement basis",
                 "its length or closure differs from the reference curve's",
@@ -108,12 +109,28 @@ impl Band {
         let count = ((l / step).ceil() as usize).max(4);
         let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
         let verts: Vec<[f64; 2]> = params.iter().map(|&u| curve.point(u)).collect();
-        let nseg = if curve.is_closed() { verts.len() } else { verts.len() - 1 };
+        let nseg = if curve.is_closed() {
+            verts.len()
+        } else {
+            verts.len() - 1
+        };
 
         let reach = half_width + step + 1.0;
         let bb = verts.iter().fold(
-            [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-            |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+            [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |b, p| {
+                [
+                    b[0].min(p[0]),
+                    b[1].min(p[1]),
+                    b[2].max(p[0]),
+                    b[3].max(p[1]),
+                ]
+            },
         );
         let gx0 = ((bb[0] - reach).floor().max(0.0)) as usize;
         let gy0 = ((bb[1] - reach).floor().max(0.0)) as usize;
@@ -127,7 +144,11 @@ impl Band {
             let a = verts[k];
             let b = verts[(k + 1) % verts.len()];
             let ua = params[k];
-            let ub = if k + 1 < params.len() { params[k + 1] } else { l };
+            let ub = if k + 1 < params.len() {
+                params[k + 1]
+            } else {
+                l
+            };
             let d = [b[0] - a[0], b[1] - a[1]];
             let dd = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
             let x_lo = ((a[0].min(b[0]) - reach).floor().max(gx0 as f64)) as usize;
@@ -183,7 +204,9 @@ impl Band {
             })
             .collect();
 
-        if std::env::var("VIC_DEBUG").is_ok() { eprintln!("refine {:?}", t_grid.elapsed()); }
+        if std::env::var("VIC_DEBUG").is_ok() {
+            eprintln!("refine {:?}", t_grid.elapsed());
+        }
         let total: usize = rows.iter().map(Vec::len).sum();
         let p = basis.degree();
         let mut band = Band {

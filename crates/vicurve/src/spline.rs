@@ -76,7 +76,10 @@ impl Basis {
         if closed && n_el < degree + 1 {
             return Err(Error::invalid(
                 "elements",
-                format!("{n_el} elements for a closed curve of degree {degree} (need at least {})", degree + 1),
+                format!(
+                    "{n_el} elements for a closed curve of degree {degree} (need at least {})",
+                    degree + 1
+                ),
             ));
         }
         if !(length.is_finite() && length > 0.0) {
@@ -166,7 +169,11 @@ impl Basis {
             // s = L on an open basis, or rounding on a periodic one.
             e = self.n_el as f64 - 1.0;
         }
-        let e = if e.is_finite() && e > 0.0 { e as usize } else { 0 };
+        let e = if e.is_finite() && e > 0.0 {
+            e as usize
+        } else {
+            0
+        };
         (e, u - e as f64)
     }
 
@@ -221,6 +228,7 @@ impl Basis {
 /// `t` in `[0, 1]` (Cox–de Boor on integer knots, where every denominator
 /// is the current degree).
 #[inline]
+#[allow(clippy::needless_range_loop)] // the indices mirror the recurrence
 pub(crate) fn cardinal_values(p: usize, t: f64, n: &mut [f64; MAX_DEGREE + 1]) {
     n[0] = 1.0;
     for j in 1..=p {
@@ -240,6 +248,7 @@ pub(crate) fn cardinal_values(p: usize, t: f64, n: &mut [f64; MAX_DEGREE + 1]) {
 /// element: `N_k(t) = sum_m polys[k][m] t^m`, `t` in `[0, 1]`. Obtained by
 /// running the Cox–de Boor recurrence of [`cardinal_values`] on polynomials,
 /// so the coefficients are exact up to rounding.
+#[allow(clippy::needless_range_loop)] // the indices mirror the recurrence
 pub fn cardinal_polynomials(p: usize) -> [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1] {
     type Poly = [f64; MAX_DEGREE + 1];
     // (c0 + c1 t) * q
@@ -247,7 +256,7 @@ pub fn cardinal_polynomials(p: usize) -> [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]
         let mut out = [0.0; MAX_DEGREE + 1];
         for m in 0..=MAX_DEGREE {
             out[m] += c0 * q[m];
-            if m + 1 <= MAX_DEGREE {
+            if m < MAX_DEGREE {
                 out[m + 1] += c1 * q[m];
             }
         }
@@ -273,6 +282,7 @@ pub fn cardinal_polynomials(p: usize) -> [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]
 
 /// All the intermediate degrees of [`cardinal_values`]: `tri[j][..=j]` holds
 /// the degree-`j` values on the element.
+#[allow(clippy::needless_range_loop)] // the indices mirror the recurrence
 fn cardinal_triangle(p: usize, t: f64, tri: &mut [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]) {
     tri[0][0] = 1.0;
     for j in 1..=p {

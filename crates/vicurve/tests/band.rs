@@ -22,13 +22,19 @@ fn circle_band_has_exact_coordinates_and_all_pixels() {
             }
         }
     }
-    assert!((band.len() as i64 - expected as i64).abs() <= 2, "{} vs {expected}", band.len());
+    assert!(
+        (band.len() as i64 - expected as i64).abs() <= 2,
+        "{} vs {expected}",
+        band.len()
+    );
     for ((p, &r), &s) in band.positions().iter().zip(band.r()).zip(band.s()) {
         let d = (p[0] - cx).hypot(p[1] - cy) - r0;
         assert!((r - d).abs() < 1e-6, "r {r} vs {d}");
         // s is (to the chord-length parametrisation's ~1e-4) the arc length
         // from the rightmost point, counterclockwise on screen.
-        let theta = (-(p[1] - cy)).atan2(p[0] - cx).rem_euclid(std::f64::consts::TAU);
+        let theta = (-(p[1] - cy))
+            .atan2(p[0] - cx)
+            .rem_euclid(std::f64::consts::TAU);
         let ds = (s - r0 * theta).abs();
         let ds = ds.min((ds - curve.param_length()).abs());
         assert!(ds < 1e-3, "s {s} vs {}", r0 * theta);
@@ -37,16 +43,30 @@ fn circle_band_has_exact_coordinates_and_all_pixels() {
 
 #[test]
 fn open_curve_band_stops_at_the_ends() {
-    let curve = InitialCurve::Segment { x0: 20.0, y0: 50.3, x1: 80.0, y1: 50.3 }.to_curve().unwrap();
+    let curve = InitialCurve::Segment {
+        x0: 20.0,
+        y0: 50.3,
+        x1: 80.0,
+        y1: 50.3,
+    }
+    .to_curve()
+    .unwrap();
     let basis = Basis::new(3, 4, curve.param_length(), false).unwrap();
     let band = Band::build(&curve, &basis, 5.0, Kind::Contour, 100, 100).unwrap();
     for p in band.positions() {
-        assert!(p[0] > 20.0 - 1e-9 && p[0] < 80.0 + 1e-9, "pixel past an end: {p:?}");
+        assert!(
+            p[0] > 20.0 - 1e-9 && p[0] < 80.0 + 1e-9,
+            "pixel past an end: {p:?}"
+        );
         assert!((p[1] - 50.3).abs() < 5.0);
     }
     // Rows 46..=55 (|r| < 5), columns 21..=79; the end columns 20 and 80
     // lie on the ends' boundary lines and may go either way.
-    assert!(band.len() >= 10 * 59 && band.len() <= 10 * 61, "{}", band.len());
+    assert!(
+        band.len() >= 10 * 59 && band.len() <= 10 * 61,
+        "{}",
+        band.len()
+    );
 }
 
 #[test]
@@ -59,7 +79,10 @@ fn pixels_beyond_the_centre_of_curvature_are_left_out() {
     let band = Band::build(&curve, &basis, 10.0, Kind::Silhouette, 100, 100).unwrap();
     for (p, &r) in band.positions().iter().zip(band.r()) {
         let d = (p[0] - cx).hypot(p[1] - cy);
-        assert!(d > 0.5, "pixel at the centre of curvature kept: {p:?}, r = {r}");
+        assert!(
+            d > 0.5,
+            "pixel at the centre of curvature kept: {p:?}, r = {r}"
+        );
         // 1 - kappa r > 0.1 with kappa = -1/8 (convex, outward normal).
         assert!(r > -7.2 - 1e-6, "r = {r}");
     }
@@ -67,13 +90,25 @@ fn pixels_beyond_the_centre_of_curvature_are_left_out() {
 
 #[test]
 fn curve_or_band_outside_the_image_is_an_error() {
-    let curve = InitialCurve::Circle { cx: 20.0, cy: 50.0, r: 15.0 }.to_curve().unwrap();
+    let curve = InitialCurve::Circle {
+        cx: 20.0,
+        cy: 50.0,
+        r: 15.0,
+    }
+    .to_curve()
+    .unwrap();
     let basis = Basis::new(3, 8, curve.param_length(), true).unwrap();
     match Band::build(&curve, &basis, 10.0, Kind::Silhouette, 100, 100) {
         Err(Error::BandOutsideImage { half_width, .. }) => assert_eq!(half_width, 10.0),
         other => panic!("expected BandOutsideImage, got {other:?}"),
     }
-    let curve = InitialCurve::Circle { cx: 10.0, cy: 50.0, r: 15.0 }.to_curve().unwrap();
+    let curve = InitialCurve::Circle {
+        cx: 10.0,
+        cy: 50.0,
+        r: 15.0,
+    }
+    .to_curve()
+    .unwrap();
     let basis = Basis::new(3, 8, curve.param_length(), true).unwrap();
     assert!(matches!(
         Band::build(&curve, &basis, 2.0, Kind::Silhouette, 100, 100),

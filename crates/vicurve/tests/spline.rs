@@ -30,14 +30,19 @@ fn cardinal(p: usize, x: f64) -> f64 {
 fn oracle(basis: &Basis, i: usize, s: f64) -> f64 {
     let p = basis.degree();
     let h = basis.element_length();
-    let l = basis.length();
     let x = (s - (i as f64 - p as f64) * h) / h;
     if basis.is_closed() {
         let n = basis.n_elements() as f64;
-        (-2..=2).map(|m| {
-            let xm = x + m as f64 * n;
-            if (0.0..=(p + 1) as f64).contains(&xm) { cardinal(p, xm) } else { 0.0 }
-        }).sum::<f64>() * 1.0 + 0.0 * l
+        (-2..=2)
+            .map(|m| {
+                let xm = x + m as f64 * n;
+                if (0.0..=(p + 1) as f64).contains(&xm) {
+                    cardinal(p, xm)
+                } else {
+                    0.0
+                }
+            })
+            .sum::<f64>()
     } else if (0.0..=(p + 1) as f64).contains(&x) {
         cardinal(p, x)
     } else {
@@ -46,10 +51,16 @@ fn oracle(basis: &Basis, i: usize, s: f64) -> f64 {
 }
 
 fn basis_strategy() -> impl Strategy<Value = (Basis, f64)> {
-    (1usize..=MAX_DEGREE, 1usize..30, 1.0f64..500.0, any::<bool>(), 0.0f64..1.0).prop_filter_map(
-        "closed bases need n_el > p",
-        |(p, n, l, closed, t)| Basis::new(p, n, l, closed).ok().map(|b| (b, t * l)),
+    (
+        1usize..=MAX_DEGREE,
+        1usize..30,
+        1.0f64..500.0,
+        any::<bool>(),
+        0.0f64..1.0,
     )
+        .prop_filter_map("closed bases need n_el > p", |(p, n, l, closed, t)| {
+            Basis::new(p, n, l, closed).ok().map(|b| (b, t * l))
+        })
 }
 
 proptest! {

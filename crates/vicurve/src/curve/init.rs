@@ -68,7 +68,9 @@ impl InitialCurve {
                     })
                     .collect()
             }
-            InitialCurve::Segment { x0, y0, x1, y1 } => resample(&[[*x0, *y0], [*x1, *y1]], false, step),
+            InitialCurve::Segment { x0, y0, x1, y1 } => {
+                resample(&[[*x0, *y0], [*x1, *y1]], false, step)
+            }
             InitialCurve::Polyline { points, closed } => resample(points, *closed, step),
         })
     }
@@ -85,28 +87,43 @@ impl InitialCurve {
         match self {
             InitialCurve::Circle { cx, cy, r } => {
                 if !finite(&[*cx, *cy, *r]) {
-                    return Err(Error::NonFinite { what: "initial circle".into() });
+                    return Err(Error::NonFinite {
+                        what: "initial circle".into(),
+                    });
                 }
                 if *r < 2.0 {
-                    return Err(Error::invalid("initial circle", format!("radius {r} px (must be at least 2 px)")));
+                    return Err(Error::invalid(
+                        "initial circle",
+                        format!("radius {r} px (must be at least 2 px)"),
+                    ));
                 }
             }
             InitialCurve::Segment { x0, y0, x1, y1 } => {
                 if !finite(&[*x0, *y0, *x1, *y1]) {
-                    return Err(Error::NonFinite { what: "initial segment".into() });
+                    return Err(Error::NonFinite {
+                        what: "initial segment".into(),
+                    });
                 }
                 if (x1 - x0).hypot(y1 - y0) < 2.0 {
-                    return Err(Error::invalid("initial segment", "shorter than 2 px".to_string()));
+                    return Err(Error::invalid(
+                        "initial segment",
+                        "shorter than 2 px".to_string(),
+                    ));
                 }
             }
             InitialCurve::Polyline { points, closed } => {
                 if points.iter().any(|p| !finite(p)) {
-                    return Err(Error::NonFinite { what: "initial polyline".into() });
+                    return Err(Error::NonFinite {
+                        what: "initial polyline".into(),
+                    });
                 }
                 let need = if *closed { 3 } else { 2 };
                 if points.len() < need {
                     return Err(Error::InvalidCurve {
-                        reason: format!("the polyline has {} points (need at least {need})", points.len()),
+                        reason: format!(
+                            "the polyline has {} points (need at least {need})",
+                            points.len()
+                        ),
                     });
                 }
             }
@@ -125,17 +142,26 @@ impl std::str::FromStr for InitialCurve {
             line: 0,
             reason,
         };
-        let (kind, rest) = spec
-            .split_once(':')
-            .ok_or_else(|| parse_err("expected circle:CX,CY,R or segment:X0,Y0,X1,Y1 or polyline:FILE.csv".into()))?;
-        let nums: std::result::Result<Vec<f64>, _> = rest.split(',').map(|t| t.trim().parse::<f64>()).collect();
+        let (kind, rest) = spec.split_once(':').ok_or_else(|| {
+            parse_err("expected circle:CX,CY,R or segment:X0,Y0,X1,Y1 or polyline:FILE.csv".into())
+        })?;
+        let nums: std::result::Result<Vec<f64>, _> =
+            rest.split(',').map(|t| t.trim().parse::<f64>()).collect();
         let nums = nums.map_err(|e| parse_err(format!("{e}")))?;
         match (kind.trim(), nums.as_slice()) {
             ("circle", &[cx, cy, r]) => Ok(InitialCurve::Circle { cx, cy, r }),
             ("segment", &[x0, y0, x1, y1]) => Ok(InitialCurve::Segment { x0, y0, x1, y1 }),
-            ("circle", v) => Err(parse_err(format!("circle needs 3 numbers CX,CY,R, got {}", v.len()))),
-            ("segment", v) => Err(parse_err(format!("segment needs 4 numbers X0,Y0,X1,Y1, got {}", v.len()))),
-            (k, _) => Err(parse_err(format!("unknown curve type '{k}' (expected circle or segment)"))),
+            ("circle", v) => Err(parse_err(format!(
+                "circle needs 3 numbers CX,CY,R, got {}",
+                v.len()
+            ))),
+            ("segment", v) => Err(parse_err(format!(
+                "segment needs 4 numbers X0,Y0,X1,Y1, got {}",
+                v.len()
+            ))),
+            (k, _) => Err(parse_err(format!(
+                "unknown curve type '{k}' (expected circle or segment)"
+            ))),
         }
     }
 }

@@ -74,7 +74,11 @@ impl SplineCurve {
         if ctrl.len() != basis.n_functions() {
             return Err(Error::invalid(
                 "control points",
-                format!("{} control points for {} basis functions", ctrl.len(), basis.n_functions()),
+                format!(
+                    "{} control points for {} basis functions",
+                    ctrl.len(),
+                    basis.n_functions()
+                ),
             ));
         }
         if ctrl.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
@@ -111,13 +115,19 @@ impl SplineCurve {
     /// measurable bias (its weight is 1e-10 of the data's). Closed curves are
     /// re-oriented counterclockwise on screen.
     pub fn fit(points: &[[f64; 2]], closed: bool, degree: usize, spacing: f64) -> Result<Self> {
-        if points.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        if points
+            .iter()
+            .any(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
             return Err(Error::NonFinite {
                 what: "curve points".into(),
             });
         }
         if !(spacing.is_finite() && spacing > 0.0) {
-            return Err(Error::invalid("control point spacing", format!("{spacing}")));
+            return Err(Error::invalid(
+                "control point spacing",
+                format!("{spacing}"),
+            ));
         }
         let mut pts: Vec<[f64; 2]> = Vec::with_capacity(points.len());
         for &p in points {
@@ -153,7 +163,7 @@ impl SplineCurve {
         } else {
             acc
         };
-        if !(length > 1e-6) {
+        if length.is_nan() || length <= 1e-6 {
             return Err(Error::InvalidCurve {
                 reason: "the curve has zero length".into(),
             });
@@ -264,7 +274,11 @@ impl SplineCurve {
         while a < u1 {
             // Integrate element by element: the integrand is smooth inside one.
             let next = ((a / h).floor() + 1.0) * h;
-            let b = if next > a { next.min(u1) } else { (a + h).min(u1) };
+            let b = if next > a {
+                next.min(u1)
+            } else {
+                (a + h).min(u1)
+            };
             total += gauss_legendre(a, b, |u| {
                 let d = self.derivatives(u)[1];
                 d[0].hypot(d[1])
@@ -310,8 +324,20 @@ impl SplineCurve {
     /// curve): `[xmin, ymin, xmax, ymax]`.
     pub fn bounding_box(&self) -> [f64; 4] {
         self.ctrl.iter().fold(
-            [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-            |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+            [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |b, p| {
+                [
+                    b[0].min(p[0]),
+                    b[1].min(p[1]),
+                    b[2].max(p[0]),
+                    b[3].max(p[1]),
+                ]
+            },
         )
     }
 

@@ -40,7 +40,11 @@ impl SplineCurve {
             let hess = d1[0] * d1[0] + d1[1] * d1[1] - (dx * d2[0] + dy * d2[1]);
             // Outside the convex region (near a focal point) Newton's
             // direction is wrong: fall back to a gradient step.
-            let step = if hess > 1e-12 { g / hess } else { g / (d1[0] * d1[0] + d1[1] * d1[1]).max(1e-12) };
+            let step = if hess > 1e-12 {
+                g / hess
+            } else {
+                g / (d1[0] * d1[0] + d1[1] * d1[1]).max(1e-12)
+            };
             let step = step.clamp(-max_step, max_step);
             let mut next = u + step;
             if closed {

@@ -58,7 +58,9 @@ impl Stage {
     pub fn element_count(&self, length: f64, min: usize) -> usize {
         match self.elements {
             Elements::Count(n) => n.max(min),
-            Elements::Length(h) | Elements::Auto { longest: h, .. } => ((length / h).round() as usize).max(min),
+            Elements::Length(h) | Elements::Auto { longest: h, .. } => {
+                ((length / h).round() as usize).max(min)
+            }
         }
     }
 }
@@ -154,17 +156,26 @@ impl FitConfig {
     /// Check every field; errors name the field and the accepted range.
     pub fn validate(&self) -> Result<()> {
         if !(1..=crate::spline::MAX_DEGREE).contains(&self.degree) {
-            return Err(Error::invalid("degree", format!("{} (must be 1 to 5)", self.degree)));
+            return Err(Error::invalid(
+                "degree",
+                format!("{} (must be 1 to 5)", self.degree),
+            ));
         }
         if let Some(stages) = &self.stages {
             if stages.is_empty() {
-                return Err(Error::invalid("stages", "empty list (give at least one R:elements pair)"));
+                return Err(Error::invalid(
+                    "stages",
+                    "empty list (give at least one R:elements pair)",
+                ));
             }
             for st in stages {
                 if !(st.half_width.is_finite() && st.half_width >= 0.5) {
                     return Err(Error::invalid(
                         "stages",
-                        format!("band half-width {} px (must be at least 0.5)", st.half_width),
+                        format!(
+                            "band half-width {} px (must be at least 0.5)",
+                            st.half_width
+                        ),
                     ));
                 }
                 match st.elements {
@@ -173,7 +184,10 @@ impl FitConfig {
                         return Err(Error::invalid("stages", format!("element length {h}")))
                     }
                     Elements::Auto { longest, shortest }
-                        if !(shortest.is_finite() && shortest > 0.0 && longest.is_finite() && longest >= shortest) =>
+                        if !(shortest.is_finite()
+                            && shortest > 0.0
+                            && longest.is_finite()
+                            && longest >= shortest) =>
                     {
                         return Err(Error::invalid(
                             "stages",
@@ -186,19 +200,31 @@ impl FitConfig {
         }
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if !positive(self.tolerance) {
-            return Err(Error::invalid("tolerance", format!("{} (must be > 0)", self.tolerance)));
+            return Err(Error::invalid(
+                "tolerance",
+                format!("{} (must be > 0)", self.tolerance),
+            ));
         }
         if self.max_iterations == 0 {
             return Err(Error::invalid("max iterations", "0"));
         }
         if !positive(self.rereference_fraction) {
-            return Err(Error::invalid("rereference fraction", format!("{}", self.rereference_fraction)));
+            return Err(Error::invalid(
+                "rereference fraction",
+                format!("{}", self.rereference_fraction),
+            ));
         }
         if !positive(self.max_step_fraction) {
-            return Err(Error::invalid("max step fraction", format!("{}", self.max_step_fraction)));
+            return Err(Error::invalid(
+                "max step fraction",
+                format!("{}", self.max_step_fraction),
+            ));
         }
         if !(self.sample_spacing.is_finite() && self.sample_spacing >= 0.01) {
-            return Err(Error::invalid("sample spacing", format!("{} (must be >= 0.01 px)", self.sample_spacing)));
+            return Err(Error::invalid(
+                "sample spacing",
+                format!("{} (must be >= 0.01 px)", self.sample_spacing),
+            ));
         }
         Ok(())
     }
@@ -219,7 +245,10 @@ pub fn parse_stages(spec: &str) -> Result<Vec<Stage>> {
         let (r, n) = item
             .split_once(':')
             .ok_or_else(|| err(format!("'{item}' is not R:ELEMENTS (e.g. 10:50)")))?;
-        let half_width: f64 = r.trim().parse().map_err(|_| err(format!("'{r}' is not a number")))?;
+        let half_width: f64 = r
+            .trim()
+            .parse()
+            .map_err(|_| err(format!("'{r}' is not a number")))?;
         let n = n.trim();
         let elements = if n == "auto" {
             Elements::Auto {
@@ -227,11 +256,21 @@ pub fn parse_stages(spec: &str) -> Result<Vec<Stage>> {
                 shortest: 5.0,
             }
         } else if let Some(len) = n.strip_suffix("px") {
-            Elements::Length(len.trim().parse().map_err(|_| err(format!("'{n}' is not a length")))?)
+            Elements::Length(
+                len.trim()
+                    .parse()
+                    .map_err(|_| err(format!("'{n}' is not a length")))?,
+            )
         } else {
-            Elements::Count(n.parse().map_err(|_| err(format!("'{n}' is not a whole number of elements")))?)
+            Elements::Count(
+                n.parse()
+                    .map_err(|_| err(format!("'{n}' is not a whole number of elements")))?,
+            )
         };
-        out.push(Stage { half_width, elements });
+        out.push(Stage {
+            half_width,
+            elements,
+        });
     }
     if out.is_empty() {
         return Err(err("no stage given".into()));

@@ -291,7 +291,8 @@ impl Correlation {
         if !max_step.is_finite() {
             return Err(StepFailure::NonFinite);
         }
-        let ssr = (n * a * a + c * c * sgg + sff + 2.0 * a * c * sg - 2.0 * a * sf - 2.0 * c * sfg).max(0.0);
+        let ssr = (n * a * a + c * c * sgg + sff + 2.0 * a * c * sg - 2.0 * a * sf - 2.0 * c * sfg)
+            .max(0.0);
         self.ssr = ssr;
         Ok(Step {
             a,
@@ -310,7 +311,13 @@ impl Correlation {
     /// systematic part, so half the mean squared difference of consecutive
     /// residuals estimates the noise variance alone (Rice's difference
     /// estimator). Allocates: call it once per stage, not per iteration.
-    pub fn estimate_noise(&mut self, lambda: &[f64], sampler: &Sampler, a: f64, c: f64) -> Option<f64> {
+    pub fn estimate_noise(
+        &mut self,
+        lambda: &[f64],
+        sampler: &Sampler,
+        a: f64,
+        c: f64,
+    ) -> Option<f64> {
         let band = &self.band;
         let p = self.basis.degree();
         let mut res: Vec<(f64, f64)> = Vec::with_capacity(band.len());
@@ -360,7 +367,8 @@ impl Correlation {
             n1 += vk * self.y1[i];
             n2 += vk * self.y2[i];
         }
-        q += n1 * (self.k_inv[0] * n1 + self.k_inv[1] * n2) + n2 * (self.k_inv[2] * n1 + self.k_inv[3] * n2);
+        q += n1 * (self.k_inv[0] * n1 + self.k_inv[1] * n2)
+            + n2 * (self.k_inv[2] * n1 + self.k_inv[3] * n2);
         (sigma2 * q / (c * c)).max(0.0).sqrt()
     }
 }

@@ -55,7 +55,11 @@ pub fn measure(image: &Image, init: &InitialCurve, config: &FitConfig) -> Result
 
 /// [`measure`] with a prepared image sampler and reference curve (for
 /// sequences and benchmarks: the sampler's prefilter is done once).
-pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfig) -> Result<Measurement> {
+pub fn measure_from(
+    sampler: &Sampler,
+    reference: SplineCurve,
+    config: &FitConfig,
+) -> Result<Measurement> {
     config.validate()?;
     if sampler.kind() != config.interpolation {
         return Err(Error::invalid(
@@ -85,7 +89,9 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
             let length = current.arc_length();
             let size = if closed { length / TAU } else { length };
             if r > 0.5 * size {
-                skipped.push(format!("R = {r} px: too wide for a curve of length {length:.1} px"));
+                skipped.push(format!(
+                    "R = {r} px: too wide for a curve of length {length:.1} px"
+                ));
                 continue;
             }
         }
@@ -108,13 +114,23 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
                         return Err(e);
                     }
                     let (x, y) = match e {
-                        Error::BandOutsideImage { x, y, .. } | Error::CurveOutsideImage { x, y, .. } => (x, y),
+                        Error::BandOutsideImage { x, y, .. }
+                        | Error::CurveOutsideImage { x, y, .. } => (x, y),
                         _ => (f64::NAN, f64::NAN),
                     };
                     outcome = Outcome::Diverged {
                         divergence: Divergence::LeftImage { x, y },
                     };
-                    reports.push(report(stage, &basis, 0, iterations, rereferences, step, started, outcome));
+                    reports.push(report(
+                        stage,
+                        &basis,
+                        0,
+                        iterations,
+                        rereferences,
+                        step,
+                        started,
+                        outcome,
+                    ));
                     break 'stages;
                 }
                 Err(e) => return Err(e),
@@ -127,7 +143,16 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
                     outcome = Outcome::Diverged {
                         divergence: Divergence::Degenerate,
                     };
-                    reports.push(report(stage, &basis, band_pixels, iterations, rereferences, step, started, outcome));
+                    reports.push(report(
+                        stage,
+                        &basis,
+                        band_pixels,
+                        iterations,
+                        rereferences,
+                        step,
+                        started,
+                        outcome,
+                    ));
                     break 'stages;
                 }
             };
@@ -138,7 +163,16 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
             } else {
                 config.rereference_fraction * r
             };
-            let (end, used) = iterate_to_end(&mut corr, &mut lambda, sampler, config, r, budget, reref_limit, &mut step);
+            let (end, used) = iterate_to_end(
+                &mut corr,
+                &mut lambda,
+                sampler,
+                config,
+                r,
+                budget,
+                reref_limit,
+                &mut step,
+            );
             iterations += used;
             let stage_end = match end {
                 Run::Rereference => None,
@@ -153,13 +187,23 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
                 }
                 Some(o @ Outcome::Diverged { .. }) => {
                     outcome = o;
-                    reports.push(report(stage, &corr.basis, band_pixels, iterations, rereferences, step, started, o));
+                    reports.push(report(
+                        stage,
+                        &corr.basis,
+                        band_pixels,
+                        iterations,
+                        rereferences,
+                        step,
+                        started,
+                        o,
+                    ));
                     break 'stages;
                 }
                 Some(o) => {
                     outcome = o;
                     if let (Elements::Auto { shortest, .. }, Some(s)) = (stage.elements, step) {
-                        let refined = refine(&current, corr, lambda, s, shortest, sampler, config, r)?;
+                        let refined =
+                            refine(&current, corr, lambda, s, shortest, sampler, config, r)?;
                         (corr, lambda, step) = (refined.0, refined.1, Some(refined.2));
                         iterations += refined.3;
                     }
@@ -167,7 +211,16 @@ pub fn measure_from(sampler: &Sampler, reference: SplineCurve, config: &FitConfi
                         corr.estimate_noise(&lambda, sampler, s.a, s.c);
                     }
                     let next = displaced(&current, &corr.basis, &lambda)?;
-                    reports.push(report(stage, &corr.basis, band_pixels, iterations, rereferences, step, started, o));
+                    reports.push(report(
+                        stage,
+                        &corr.basis,
+                        band_pixels,
+                        iterations,
+                        rereferences,
+                        step,
+                        started,
+                        o,
+                    ));
                     last = Some(Final {
                         reference: std::mem::replace(&mut current, next),
                         c: step.map_or(1.0, |s| s.c),
@@ -248,7 +301,12 @@ fn iterate_to_end(
         used += 1;
         *step = Some(s);
         let omega = relax.factor(&corr.delta);
-        let scale = omega * if omega * s.max_step > cap { cap / (omega * s.max_step) } else { 1.0 };
+        let scale = omega
+            * if omega * s.max_step > cap {
+                cap / (omega * s.max_step)
+            } else {
+                1.0
+            };
         relax.applied(scale);
         for (l, d) in lambda.iter_mut().zip(&corr.delta) {
             *l += scale * d;
@@ -273,7 +331,11 @@ fn iterate_to_end(
 /// when `rep^2 > sigma_f^2 - sigma_c^2` (the fine error being ~rep/16 for
 /// cubics), i.e. when the difference exceeds twice the noise increase. The
 /// noise variance comes from [`Correlation::estimate_noise`], which excludes
-/// the systematic mismatch between the profiles.
+/// the systematic mismatch between the profiles. A shape error also shrinks
+/// fast with the element length (16 times per halving for cubics, 4 for
+/// linear elements); differences driven by noise or by the aliasing of a
+/// sharp edge on the pixel grid do not, so refinement also stops when the
+/// change is not at least halved (RMS) from one halving to the next.
 #[allow(clippy::too_many_arguments)]
 fn refine(
     reference: &SplineCurve,
@@ -290,14 +352,27 @@ fn refine(
     let length = reference.param_length();
     let params = reference.sample_params((length.ceil() as usize).max(8));
     let mut iterations = 0;
+    let mut previous_diff2 = f64::INFINITY;
     corr.estimate_noise(&lambda, sampler, step.a, step.c);
     loop {
         let h = corr.basis.element_length() / 2.0;
         if h < shortest {
             break;
         }
-        let basis = Basis::new(config.degree, ((length / h).round() as usize).max(min_el), length, closed)?;
-        let Ok(band) = Band::build(reference, &basis, r, config.kind, sampler.width(), sampler.height()) else {
+        let basis = Basis::new(
+            config.degree,
+            ((length / h).round() as usize).max(min_el),
+            length,
+            closed,
+        )?;
+        let Ok(band) = Band::build(
+            reference,
+            &basis,
+            r,
+            config.kind,
+            sampler.width(),
+            sampler.height(),
+        ) else {
             break;
         };
         let Ok(mut fine) = Correlation::new(band, basis) else {
@@ -324,15 +399,19 @@ fn refine(
         let mut scratch_f = vec![0.0; fine.n_unknowns()];
         let (mut diff2, mut noise2) = (0.0, 0.0);
         for &u in &params {
-            let d = displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
+            let d =
+                displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
             diff2 += d * d;
             let sf = fine.position_sigma(u, fs.c, &mut scratch_f);
             let sc = corr.position_sigma(u, step.c, &mut scratch_c);
             noise2 += sf * sf - sc * sc;
         }
-        if diff2 <= 2.0 * noise2.max(0.0) {
+        // Significant, and still converging like a shape error (a change
+        // that does not shrink is noise or aliasing being chased).
+        if diff2 <= 2.0 * noise2.max(0.0) || diff2 >= 0.25 * previous_diff2 {
             break;
         }
+        previous_diff2 = diff2;
         (corr, lambda, step) = (fine, fine_lambda, fs);
     }
     Ok((corr, lambda, step, iterations))
@@ -342,7 +421,9 @@ fn refine(
 fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
     let mut v = [0.0; MAX_DEGREE + 1];
     let first = basis.eval(u, &mut v);
-    (0..=basis.degree()).map(|k| lambda[basis.index(first, k)] * v[k]).sum()
+    (0..=basis.degree())
+        .map(|k| lambda[basis.index(first, k)] * v[k])
+        .sum()
 }
 
 /// Scalar secant relaxation of the Gauss–Newton steps.
@@ -417,7 +498,9 @@ impl Final {
         let l = self.reference.param_length();
         let closed = self.reference.is_closed();
         let count = (l / fine_step).ceil() as usize;
-        let params = self.reference.sample_params(if closed { count } else { count + 1 });
+        let params = self
+            .reference
+            .sample_params(if closed { count } else { count + 1 });
         let mut scratch = vec![0.0; self.corr.n_unknowns()];
         let pts: Vec<[f64; 2]> = params
             .iter()
@@ -463,14 +546,21 @@ impl Final {
 fn displaced_point(reference: &SplineCurve, basis: &Basis, lambda: &[f64], u: f64) -> [f64; 2] {
     let f = reference.frame(u);
     let disp = displacement(basis, lambda, u);
-    [f.point[0] + disp * f.normal[0], f.point[1] + disp * f.normal[1]]
+    [
+        f.point[0] + disp * f.normal[0],
+        f.point[1] + disp * f.normal[1],
+    ]
 }
 
 /// The new reference curve `x0 + U n`.
 fn displaced(reference: &SplineCurve, basis: &Basis, lambda: &[f64]) -> Result<SplineCurve> {
     let l = reference.param_length();
     let count = (l / REFERENCE_SAMPLE_STEP).ceil() as usize;
-    let params = reference.sample_params(if reference.is_closed() { count } else { count + 1 });
+    let params = reference.sample_params(if reference.is_closed() {
+        count
+    } else {
+        count + 1
+    });
     let pts: Vec<[f64; 2]> = params
         .iter()
         .map(|&u| displaced_point(reference, basis, lambda, u))

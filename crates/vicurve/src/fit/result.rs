@@ -26,10 +26,16 @@ pub enum Divergence {
 impl std::fmt::Display for Divergence {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Divergence::LeftImage { x, y } => write!(f, "the curve left the image near ({x:.1}, {y:.1})"),
-            Divergence::NoContrast => f.write_str("the band sees no contrast (no edge or line within R of the curve)"),
+            Divergence::LeftImage { x, y } => {
+                write!(f, "the curve left the image near ({x:.1}, {y:.1})")
+            }
+            Divergence::NoContrast => {
+                f.write_str("the band sees no contrast (no edge or line within R of the curve)")
+            }
             Divergence::NonFinite => f.write_str("the unknowns became NaN or infinite"),
-            Divergence::Degenerate => f.write_str("the curve became degenerate (an element sees no gradient)"),
+            Divergence::Degenerate => {
+                f.write_str("the curve became degenerate (an element sees no gradient)")
+            }
         }
     }
 }

@@ -97,10 +97,24 @@ fn add_edge(acc: &mut [f64], width: usize, height: usize, a: [f64; 2], b: [f64; 
         // Next vertical pixel border (only those inside [0, width] matter).
         let (nx, tx) = if dx > 0.0 {
             let nx = if x < 0.0 { 0.0 } else { x.floor() + 1.0 };
-            (nx, if nx > wf { f64::INFINITY } else { (nx - x0) / dx })
+            (
+                nx,
+                if nx > wf {
+                    f64::INFINITY
+                } else {
+                    (nx - x0) / dx
+                },
+            )
         } else if dx < 0.0 {
             let nx = if x > wf { wf } else { x.ceil() - 1.0 };
-            (nx, if nx < 0.0 { f64::INFINITY } else { (nx - x0) / dx })
+            (
+                nx,
+                if nx < 0.0 {
+                    f64::INFINITY
+                } else {
+                    (nx - x0) / dx
+                },
+            )
         } else {
             (0.0, f64::INFINITY)
         };

@@ -120,7 +120,7 @@ fn offset_curve(
         out.push(point(s));
         let ds = step(s);
         let ds = ds.min(step(s + ds));
-        if !(ds >= min_step) || out.len() - start > MAX_VERTICES {
+        if ds.is_nan() || ds < min_step || out.len() - start > MAX_VERTICES {
             return Err(Error::invalid(
                 "shape",
                 "the curve is too large or too sharply bent to be drawn as a polygon",

@@ -159,9 +159,7 @@ impl Shape {
             Shape::Circle { .. } => TURN,
             Shape::Ellipse { a, b, .. } => TURN * a.min(b) / a.max(b),
             Shape::Star {
-                amplitude,
-                lobes,
-                ..
+                amplitude, lobes, ..
             } => {
                 // |dψ/dθ| = |r² + 2r'² - r r''| / (r² + r'²)
                 //        <= 1 + 2 (r'/r)² + |r''|/r.
@@ -360,7 +358,7 @@ impl Shape {
         let closed = self.is_closed();
         let segments = if closed { segments.max(3.0) } else { segments };
         let count = if closed { segments } else { segments + 1.0 };
-        if !(count <= max_points as f64) {
+        if count.is_nan() || count > max_points as f64 {
             return Err(Error::invalid(
                 "max_step",
                 format!("{max_step} px would give {count} points (at most {max_points})"),

@@ -1,0 +1,409 @@
+//! The command line, end to end: synthesise, measure, evaluate, and every
+//! bad input giving one clear line and a non-zero exit.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn vicurve(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vicurve"))
+        .args(args)
+        .output()
+        .expect("run vicurve")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// The error contract: exit code `code`, stderr one line starting with
+/// `vicurve: error:` and containing `needle`.
+fn assert_error(out: &Output, code: i32, needle: &str) {
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
+    assert!(lines[0].starts_with("vicurve: error: "), "{err}");
+    assert!(
+        lines[0].to_lowercase().contains(&needle.to_lowercase()),
+        "'{needle}' not in: {err}"
+    );
+}
+
+fn p(dir: &Path, name: &str) -> String {
+    dir.join(name).display().to_string()
+}
+
+/// A 200x200 disc of radius 60 and its truth, in `dir`.
+fn disc(dir: &Path) -> (String, String) {
+    let img = p(dir, "disc.png");
+    let truth = p(dir, "disc.json");
+    let out = vicurve(&[
+        "synth", "disc", "--size", "200x200", "--radius", "60", "--blur", "0.8", "--out", &img,
+        "--truth", &truth,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    (img, truth)
+}
+
+#[test]
+fn synth_measure_eval_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = disc(d);
+    let (json, csv, svg, png) = (
+        p(d, "r.json"),
+        p(d, "pts.csv"),
+        p(d, "o.svg"),
+        p(d, "o.png"),
+    );
+    let out = vicurve(&[
+        "measure",
+        &img,
+        "--init",
+        "circle:101,98,64",
+        "--out",
+        &json,
+        "--points",
+        &csv,
+        "--svg",
+        &svg,
+        "--png",
+        &png,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // The CSV header is a contract.
+    let points = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(points.lines().next(), Some("s,x,y,nx,ny,sigma"));
+    let rows: Vec<Vec<f64>> = points
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(
+        rows.len() > 370,
+        "{} samples for a 377 px curve",
+        rows.len()
+    );
+    for w in rows.windows(2) {
+        let gap = (w[1][1] - w[0][1]).hypot(w[1][2] - w[0][2]);
+        assert!(gap <= 1.0 + 1e-9, "samples {gap} px apart");
+    }
+    // The JSON records what a reader needs.
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for key in [
+        "input",
+        "coordinates",
+        "config",
+        "initial_curve",
+        "outcome",
+        "curve",
+        "stages",
+        "gray_levels",
+    ] {
+        assert!(record.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(record["outcome"]["status"], "converged");
+    assert_eq!(record["curve"]["closed"], true);
+    assert_eq!(record["polarity"], "bright inside");
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    // eval reads the points back against the truth.
+    let stats = p(d, "stats.json");
+    let out = vicurve(&["eval", &csv, &truth, "--json", &stats]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(s["scatter"].as_f64().unwrap() < 5e-3, "{s}");
+    assert!(s["bias"].as_f64().unwrap().abs() < 1.5e-2, "{s}");
+    assert!(text(&out.stdout).contains("scatter"));
+}
+
+#[test]
+fn summary_without_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (img, _) = disc(dir.path());
+    let out = vicurve(&[
+        "measure",
+        &img,
+        "--init",
+        "circle:100,100,57",
+        "--stages",
+        "10:8,4:12",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let s = text(&out.stdout);
+    for word in [
+        "outcome:     converged",
+        "iterations:",
+        "residual:",
+        "length:",
+        "area:",
+    ] {
+        assert!(s.contains(word), "{word} missing in {s}");
+    }
+}
+
+#[test]
+fn open_curve_from_a_polyline_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let img = p(d, "edge.tif");
+    let truth = p(d, "edge.json");
+    let out = vicurve(&[
+        "synth",
+        "sine-edge",
+        "--size",
+        "240x160",
+        "--amplitude",
+        "6",
+        "--wavelength",
+        "200",
+        "--bits",
+        "16",
+        "--blur",
+        "1",
+        "--out",
+        &img,
+        "--truth",
+        &truth,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let poly = d.join("start.csv");
+    std::fs::write(&poly, "x,y\n20,80\n120,82\n220,80\n").unwrap();
+    let csv = p(d, "pts.csv");
+    let out = vicurve(&[
+        "measure",
+        &img,
+        "--init",
+        &format!("polyline:{}", poly.display()),
+        "--points",
+        &csv,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = vicurve(&["eval", &csv, &truth]);
+    let s = text(&out.stdout);
+    let scatter: f64 = s
+        .lines()
+        .find(|l| l.starts_with("scatter"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+        .unwrap();
+    assert!(scatter < 1e-2, "{s}");
+}
+
+#[test]
+fn bad_inputs_give_one_line_and_a_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, _) = disc(d);
+    let missing = p(d, "nope.png");
+    assert_error(
+        &vicurve(&["measure", &missing, "--init", "circle:100,100,60"]),
+        1,
+        "not found",
+    );
+
+    let text_file = d.join("text.png");
+    std::fs::write(&text_file, "this is not an image").unwrap();
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &text_file.display().to_string(),
+            "--init",
+            "circle:100,100,60",
+        ]),
+        1,
+        "unsupported",
+    );
+
+    let empty = d.join("empty.png");
+    std::fs::write(&empty, b"").unwrap();
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &empty.display().to_string(),
+            "--init",
+            "circle:100,100,60",
+        ]),
+        1,
+        "image",
+    );
+
+    let bytes = std::fs::read(&img).unwrap();
+    let truncated = d.join("truncated.png");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &truncated.display().to_string(),
+            "--init",
+            "circle:100,100,60",
+        ]),
+        1,
+        "decode",
+    );
+
+    assert_error(
+        &vicurve(&["measure", &img, "--init", "circle:100,100"]),
+        1,
+        "circle needs 3 numbers",
+    );
+    assert_error(
+        &vicurve(&["measure", &img, "--init", "square:1,2,3"]),
+        1,
+        "unknown curve type",
+    );
+    assert_error(
+        &vicurve(&["measure", &img, "--init", "circle:NaN,100,60"]),
+        1,
+        "non-finite",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--stages",
+            "10",
+        ]),
+        1,
+        "stages",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--stages",
+            "10:x",
+        ]),
+        1,
+        "stages",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--degree",
+            "7",
+        ]),
+        1,
+        "degree",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--polarity",
+            "up",
+        ]),
+        1,
+        "polarity",
+    );
+    // Initial curve outside the image, band outside the image.
+    assert_error(
+        &vicurve(&["measure", &img, "--init", "circle:100,100,150"]),
+        1,
+        "leaves the image",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--stages",
+            "45:10",
+        ]),
+        1,
+        "band",
+    );
+    // NaN in a polyline file.
+    let poly = d.join("nan.csv");
+    std::fs::write(&poly, "10,10\n20,NaN\n30,30\n").unwrap();
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            &format!("polyline:{}", poly.display()),
+        ]),
+        1,
+        "non-finite",
+    );
+    // Eval with a malformed truth file.
+    let bad_truth = d.join("bad.json");
+    std::fs::write(&bad_truth, "{\"shape\": \"circle\"").unwrap();
+    let pts = d.join("pts.csv");
+    std::fs::write(&pts, "x,y\n1,2\n").unwrap();
+    assert_error(
+        &vicurve(&[
+            "eval",
+            &pts.display().to_string(),
+            &bad_truth.display().to_string(),
+        ]),
+        1,
+        "parse",
+    );
+    // Synth with a bad size.
+    assert_error(
+        &vicurve(&["synth", "disc", "--size", "0x10", "--out", &p(d, "x.png")]),
+        1,
+        "size",
+    );
+}
+
+#[test]
+fn a_diverging_fit_keeps_its_outputs_and_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A uniform image: no edge anywhere, the band sees no contrast.
+    let img = p(d, "flat.png");
+    let out = vicurve(&[
+        "synth", "disc", "--size", "120x120", "--radius", "20", "--levels", "0.5,0.5", "--out",
+        &img,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json = p(d, "r.json");
+    let out = vicurve(&[
+        "measure",
+        &img,
+        "--init",
+        "circle:60,60,30",
+        "--stages",
+        "5:10",
+        "--out",
+        &json,
+    ]);
+    assert_error(&out, 3, "diverged");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(record["outcome"]["status"], "diverged");
+}
+
+#[test]
+fn demo_runs_and_reports_accuracy() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir: PathBuf = dir.path().join("demo");
+    let out = vicurve(&["demo", "--out-dir", &out_dir.display().to_string()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let s = text(&out.stdout);
+    assert!(s.contains("scatter") && s.contains("converged"), "{s}");
+    for f in [
+        "star.png",
+        "truth.json",
+        "result.json",
+        "points.csv",
+        "overlay.svg",
+        "overlay.png",
+    ] {
+        assert!(out_dir.join(f).exists(), "{f} missing");
+    }
+}
