@@ -60,13 +60,18 @@ pub struct Band {
     pub(crate) weight: Vec<f64>,
 }
 
-/// One band pixel, as [`Band::build`] finds it before it is stored.
+/// One band pixel with everything [`Band`] stores about it, as the parallel
+/// part of [`Band::build`] computes it.
 struct Candidate {
     pos: [f64; 2],
     normal: [f64; 2],
     s: f64,
     r: f64,
-    jacobian: f64,
+    first: u32,
+    basis: [f64; MAX_DEGREE + 1],
+    gamma: f64,
+    dgamma: f64,
+    weight: f64,
 }
 
 impl Band {
@@ -140,6 +145,13 @@ impl Band {
         let gh = gy1 + 1 - gy0;
         let mut best_d2 = vec![f64::INFINITY; gw * gh];
         let mut best_u = vec![0.0; gw * gh];
+        let dir = |k: usize| {
+            let a = verts[k % verts.len()];
+            let b = verts[(k + 1) % verts.len()];
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-12);
+            [d[0] / len, d[1] / len]
+        };
         for k in 0..nseg {
             let a = verts[k];
             let b = verts[(k + 1) % verts.len()];
@@ -150,15 +162,60 @@ impl Band {
                 l
             };
             let d = [b[0] - a[0], b[1] - a[1]];
-            let dd = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
-            let x_lo = ((a[0].min(b[0]) - reach).floor().max(gx0 as f64)) as usize;
-            let x_hi = ((a[0].max(b[0]) + reach).ceil().min(gx1 as f64)) as usize;
-            let y_lo = ((a[1].min(b[1]) - reach).floor().max(gy0 as f64)) as usize;
-            let y_hi = ((a[1].max(b[1]) + reach).ceil().min(gy1 as f64)) as usize;
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let dd = (len * len).max(1e-300);
+            // Only the pixels whose foot falls on this chord (give or take
+            // `ext`) can have it as their closest chord. `ext` covers the
+            // wedge between this chord's rectangle and its neighbours' on the
+            // convex side, which widens with the distance and the turning.
+            let t = dir(k);
+            let turn = |j: usize| {
+                let o = dir(j);
+                (t[0] * o[1] - t[1] * o[0]).abs().asin()
+            };
+            let prev = if k > 0 || curve.is_closed() {
+                turn(k + nseg - 1)
+            } else {
+                0.0
+            };
+            let next = if k + 1 < nseg || curve.is_closed() {
+                turn(k + 1)
+            } else {
+                0.0
+            };
+            let ext = 1.0 + reach * prev.max(next).min(1.0) * 2.0;
+            let (lo, hi) = (-ext, len + ext);
+            let n = [-t[1], t[0]];
+            let y_lo = ((a[1].min(b[1]) - reach - ext).floor().max(gy0 as f64)) as usize;
+            let y_hi = ((a[1].max(b[1]) + reach + ext).ceil().min(gy1 as f64)) as usize;
             for y in y_lo..=y_hi {
-                let row = (y - gy0) * gw;
                 let py = y as f64 - a[1];
-                for x in x_lo..=x_hi {
+                // x-range where (X - a).t in [lo, hi] and |(X - a).n| <= reach.
+                let mut x_min = f64::NEG_INFINITY;
+                let mut x_max = f64::INFINITY;
+                for (axis, (mn, mx)) in [(t, (lo, hi)), (n, (-reach, reach))] {
+                    let rest = py * axis[1];
+                    if axis[0].abs() < 1e-12 {
+                        if rest < mn || rest > mx {
+                            x_min = f64::INFINITY;
+                        }
+                        continue;
+                    }
+                    let e0 = (mn - rest) / axis[0];
+                    let e1 = (mx - rest) / axis[0];
+                    x_min = x_min.max(e0.min(e1));
+                    x_max = x_max.min(e0.max(e1));
+                }
+                if x_min > x_max {
+                    continue;
+                }
+                let x_lo = ((a[0] + x_min).floor().max(gx0 as f64)) as usize;
+                let x_hi = (a[0] + x_max).ceil().min(gx1 as f64);
+                if x_hi < x_lo as f64 {
+                    continue;
+                }
+                let row = (y - gy0) * gw;
+                for x in x_lo..=x_hi as usize {
                     let px = x as f64 - a[0];
                     let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
                     let ex = px - t * d[0];
@@ -173,7 +230,6 @@ impl Band {
             }
         }
 
-        let t_grid = std::time::Instant::now();
         // Refine on the exact curve, row by row in parallel (raster order kept).
         let cutoff2 = (half_width + step).powi(2);
         let rows: Vec<Vec<Candidate>> = (0..gh)
@@ -192,21 +248,25 @@ impl Band {
                     if pr.at_end || pr.r.abs() >= half_width || jacobian <= MIN_JACOBIAN {
                         continue;
                     }
+                    let mut values = [0.0; MAX_DEGREE + 1];
+                    let first = basis.eval(pr.u, &mut values) as u32;
+                    let rho = pr.r / half_width;
                     out.push(Candidate {
                         pos: [x, y],
                         normal: pr.normal,
                         s: pr.u,
                         r: pr.r,
-                        jacobian,
+                        first,
+                        basis: values,
+                        gamma: kind.gamma(rho),
+                        dgamma: kind.gamma_prime(rho) / half_width,
+                        weight: 1.0 / jacobian,
                     });
                 }
                 out
             })
             .collect();
 
-        if std::env::var("VIC_DEBUG").is_ok() {
-            eprintln!("refine {:?}", t_grid.elapsed());
-        }
         let total: usize = rows.iter().map(Vec::len).sum();
         let p = basis.degree();
         let mut band = Band {
@@ -223,19 +283,16 @@ impl Band {
             dgamma: Vec::with_capacity(total),
             weight: Vec::with_capacity(total),
         };
-        let mut v = [0.0; MAX_DEGREE + 1];
         for c in rows.into_iter().flatten() {
-            let first = basis.eval(c.s, &mut v);
-            let rho = c.r / half_width;
             band.pos.push(c.pos);
             band.normal.push(c.normal);
             band.s.push(c.s);
             band.r.push(c.r);
-            band.first.push(first as u32);
-            band.basis.extend_from_slice(&v[..=p]);
-            band.gamma.push(kind.gamma(rho));
-            band.dgamma.push(kind.gamma_prime(rho) / half_width);
-            band.weight.push(1.0 / c.jacobian);
+            band.first.push(c.first);
+            band.basis.extend_from_slice(&c.basis[..=p]);
+            band.gamma.push(c.gamma);
+            band.dgamma.push(c.dgamma);
+            band.weight.push(c.weight);
         }
         Ok(band)
     }

@@ -325,17 +325,26 @@ const POLE: f64 = -0.267_949_192_431_122_7;
 /// B-spline that interpolates them with mirror boundaries (rows, then
 /// columns: the 2-D filter is separable).
 fn prefilter_2d(values: &mut [f64], w: usize, h: usize) {
-    for row in values.chunks_exact_mut(w) {
-        prefilter_line(row);
-    }
-    let mut column = vec![0.0; h];
-    for x in 0..w {
-        for (y, c) in column.iter_mut().enumerate() {
-            *c = values[y * w + x];
-        }
-        prefilter_line(&mut column);
-        for (y, c) in column.iter().enumerate() {
-            values[y * w + x] = *c;
+    use rayon::prelude::*;
+    values.par_chunks_exact_mut(w).for_each(prefilter_line);
+    // Columns: filter the rows of the transpose (contiguous, in parallel).
+    let mut t = vec![0.0; w * h];
+    transpose(values, &mut t, w, h);
+    t.par_chunks_exact_mut(h).for_each(prefilter_line);
+    transpose(&t, values, h, w);
+}
+
+/// `dst` (`w` rows of `h`) = transpose of `src` (`h` rows of `w`), by
+/// cache-sized blocks.
+fn transpose(src: &[f64], dst: &mut [f64], w: usize, h: usize) {
+    const B: usize = 32;
+    for y0 in (0..h).step_by(B) {
+        for x0 in (0..w).step_by(B) {
+            for y in y0..(y0 + B).min(h) {
+                for x in x0..(x0 + B).min(w) {
+                    dst[x * h + y] = src[y * w + x];
+                }
+            }
         }
     }
 }

@@ -145,7 +145,7 @@ impl Default for FitConfig {
             interpolation: Interpolation::CubicBSpline,
             tolerance: 1e-4,
             max_iterations: 200,
-            rereference_fraction: 0.5,
+            rereference_fraction: 0.75,
             max_step_fraction: 0.5,
             sample_spacing: 1.0,
         }
