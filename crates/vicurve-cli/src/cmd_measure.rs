@@ -43,7 +43,8 @@ pub struct Args {
     /// Degree of the B-splines (1 to 5).
     #[arg(long, default_value_t = 3)]
     pub degree: usize,
-    /// Image interpolation: `cubic` (B-spline, the default) or `bilinear`.
+    /// Image interpolation: `cubic` (B-spline, the default), `bilinear` or
+    /// `keys` (cubic convolution); see docs/benchmarks.md for the choice.
     #[arg(long)]
     pub interp: Option<String>,
     /// Convergence tolerance on the displacement update, pixels.
@@ -149,8 +150,9 @@ pub fn parse_interp(s: &str) -> Result<Interpolation, Failure> {
     match s {
         "cubic" | "cubic-bspline" => Ok(Interpolation::CubicBSpline),
         "bilinear" | "linear" => Ok(Interpolation::Bilinear),
+        "keys" => Ok(Interpolation::Keys),
         _ => Err(Failure::Error(format!(
-            "unknown interpolation '{s}' (expected cubic or bilinear)"
+            "unknown interpolation '{s}' (expected cubic, bilinear or keys)"
         ))),
     }
 }

@@ -231,7 +231,16 @@ impl Band {
         }
 
         // Refine on the exact curve, row by row in parallel (raster order kept).
-        let cutoff2 = (half_width + step).powi(2);
+        // The polyline is within its largest sagitta of the curve (about
+        // chord * turning angle / 8; bounded by a quarter for safety), so
+        // only pixels that near the band need the exact projection.
+        let mut sagitta: f64 = 0.0;
+        for k in 0..nseg {
+            let (t0, t1) = (dir(k), dir(k + 1));
+            let turn = (t0[0] * t1[1] - t0[1] * t1[0]).abs().asin();
+            sagitta = sagitta.max(step * turn / 4.0);
+        }
+        let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
         let rows: Vec<Vec<Candidate>> = (0..gh)
             .into_par_iter()
             .map(|j| {

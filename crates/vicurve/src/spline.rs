@@ -158,16 +158,20 @@ impl Basis {
     /// Open bases clamp `s` to `[0, L]`; periodic ones wrap it.
     #[inline]
     pub fn locate(&self, s: f64) -> (usize, f64) {
+        let n = self.n_el as f64;
         let mut u = s / self.h;
         if self.closed {
-            u = u.rem_euclid(self.n_el as f64);
+            // rem_euclid is slow; most calls are already in range.
+            if !(0.0..n).contains(&u) {
+                u = u.rem_euclid(n);
+            }
         } else {
-            u = u.clamp(0.0, self.n_el as f64);
+            u = u.clamp(0.0, n);
         }
         let mut e = u.floor();
-        if e >= self.n_el as f64 {
+        if e >= n {
             // s = L on an open basis, or rounding on a periodic one.
-            e = self.n_el as f64 - 1.0;
+            e = n - 1.0;
         }
         let e = if e.is_finite() && e > 0.0 {
             e as usize

@@ -123,8 +123,8 @@ pub struct FitConfig {
     /// Iteration limit per stage. Default: 200.
     pub max_iterations: usize,
     /// Re-reference within a stage when `max |U|` exceeds this fraction of
-    /// `R` (the linearisation holds while `U` is small against `R`).
-    /// Default: 0.5.
+    /// `R` (the linearisation holds while `U` is small against `R`; each
+    /// re-reference costs a new band). Default: 0.75.
     pub rereference_fraction: f64,
     /// Limit each Gauss–Newton step to this fraction of `R`, pixels per
     /// pixel of band half-width (keeps a start far from the edge from
