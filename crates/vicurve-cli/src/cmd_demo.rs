@@ -6,9 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{presets, render};
 use vicurve::truth::{evaluate, Shape, Truth};
-use vicurve::virtual_image::Kind;
 
 /// Synthesise a star, measure it from a circle, report the accuracy.
 #[derive(clap::Args)]
@@ -21,27 +20,9 @@ pub struct Args {
 pub fn run(args: Args) -> Result<(), Failure> {
     let dir = &args.out_dir;
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let (cx, cy) = (512.3, 511.6);
-    let spec = RenderSpec {
-        width: 1024,
-        height: 1024,
-        shape: Shape::Star {
-            cx,
-            cy,
-            r0: 300.0,
-            amplitude: 0.2,
-            lobes: 5,
-            phase: 0.0,
-        },
-        kind: Kind::Silhouette,
-        line_width: 3.0,
-        foreground: 0.8,
-        background: 0.2,
-        method: Method::Coverage,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 1,
-        bits: Some(8),
+    let spec = presets::star_1024();
+    let Shape::Star { cx, cy, .. } = spec.shape else {
+        return Err(Failure::Error("the demo preset is not a star".into()));
     };
     println!("1. rendering a 1024x1024 star r = 300 (1 + 0.2 cos 5θ), exact pixel coverage, blur 1 px, noise 1 %, 8-bit");
     let image = render(&spec)?;

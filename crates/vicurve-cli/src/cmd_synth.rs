@@ -2,7 +2,7 @@
 
 use crate::Failure;
 use std::path::PathBuf;
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::truth::{Shape, Truth};
 use vicurve::virtual_image::Kind;
 
@@ -25,6 +25,9 @@ pub enum ShapeName {
     /// silhouette profile of half-width 10 px at pixel centres, 8-bit.
     PaperDisc,
 }
+
+/// Gray levels BACKGROUND,FOREGROUND when not given.
+const DEFAULT_LEVELS: &str = "0.2,0.8";
 
 /// Render a synthetic image and its truth file.
 #[derive(clap::Args)]
@@ -93,7 +96,7 @@ pub struct Args {
     pub bits: u8,
     /// Gray levels BACKGROUND,FOREGROUND in [0, 1] (foreground: inside
     /// closed shapes, above a sine edge, the line of a contour).
-    #[arg(long, default_value = "0.2,0.8")]
+    #[arg(long, default_value = DEFAULT_LEVELS)]
     pub levels: String,
 }
 
@@ -143,11 +146,25 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
             a.size
         )));
     }
-    let (mut w, mut h) = (size[0], size[1]);
-    if a.shape == ShapeName::PaperDisc {
-        (w, h) = (512.0, 512.0);
-    }
+    let (w, h) = (size[0], size[1]);
     let levels = numbers("levels", &a.levels, ',', 2)?;
+    if a.shape == ShapeName::PaperDisc {
+        // The preset (512x512, levels 0 and 1 unless given), with the
+        // user's radius, profile, blur, noise and depth on top.
+        let mut spec = presets::paper_disc(a.profile.unwrap_or(10.0));
+        if let Shape::Circle { r, .. } = &mut spec.shape {
+            *r = a.radius.unwrap_or(*r);
+        }
+        if a.levels != DEFAULT_LEVELS {
+            (spec.background, spec.foreground) = (levels[0], levels[1]);
+        }
+        spec.blur_sigma = a.blur;
+        spec.noise = a.noise;
+        spec.seed = a.seed;
+        spec.bits = Some(a.bits);
+        spec.validate()?;
+        return Ok(spec);
+    }
     let small = w.min(h);
     let (cx, cy) = match &a.center {
         Some(c) => {
@@ -167,12 +184,9 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         x_max: w - 1.0,
     };
     let shape = match a.shape {
-        ShapeName::Disc | ShapeName::Ring => Shape::Circle { cx, cy, r: radius },
-        ShapeName::PaperDisc => Shape::Circle {
-            cx: 256.3,
-            cy: 255.6,
-            r: a.radius.unwrap_or(200.0),
-        },
+        ShapeName::Disc | ShapeName::Ring | ShapeName::PaperDisc => {
+            Shape::Circle { cx, cy, r: radius }
+        }
         ShapeName::Ellipse => {
             let ab = match &a.axes {
                 Some(t) => numbers("axes", t, ',', 2)?,
@@ -200,15 +214,8 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         ShapeName::Ring | ShapeName::SineLine => Some(a.line.unwrap_or(3.0)),
         _ => a.line,
     };
-    let profile = match a.shape {
-        ShapeName::PaperDisc => Some(a.profile.unwrap_or(10.0)),
-        _ => a.profile,
-    };
-    let (background, foreground) = if a.shape == ShapeName::PaperDisc && a.levels == "0.2,0.8" {
-        (0.0, 1.0)
-    } else {
-        (levels[0], levels[1])
-    };
+    let profile = a.profile;
+    let (background, foreground) = (levels[0], levels[1]);
     let spec = RenderSpec {
         width: w as usize,
         height: h as usize,

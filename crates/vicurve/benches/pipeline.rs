@@ -11,55 +11,18 @@ use vicurve::band::Band;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, measure_from, Elements, FitConfig, Stage};
 use vicurve::interp::{Interpolation, Sampler};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{presets, render};
 use vicurve::solver::{BandCholesky, SymBandMatrix};
 use vicurve::spline::Basis;
-use vicurve::truth::Shape;
 use vicurve::virtual_image::Kind;
 use vicurve::Image;
 
 fn paper_disc() -> Image {
-    render(&RenderSpec {
-        width: 512,
-        height: 512,
-        shape: Shape::Circle {
-            cx: 256.3,
-            cy: 255.6,
-            r: 200.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Profile { half_width: 10.0 },
-        foreground: 1.0,
-        background: 0.0,
-        bits: Some(8),
-        ..RenderSpec::default()
-    })
-    .unwrap()
+    render(&presets::paper_disc(10.0)).unwrap()
 }
 
 fn star() -> Image {
-    render(&RenderSpec {
-        width: 1024,
-        height: 1024,
-        shape: Shape::Star {
-            cx: 512.3,
-            cy: 511.6,
-            r0: 300.0,
-            amplitude: 0.2,
-            lobes: 5,
-            phase: 0.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 3,
-        bits: Some(8),
-        ..RenderSpec::default()
-    })
-    .unwrap()
+    render(&presets::star_1024()).unwrap()
 }
 
 fn paper_config() -> FitConfig {

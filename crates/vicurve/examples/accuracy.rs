@@ -7,7 +7,7 @@
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, Elements, FitConfig, Stage};
 use vicurve::interp::Interpolation;
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::truth::{evaluate, Shape};
 use vicurve::virtual_image::Kind;
 
@@ -26,21 +26,7 @@ fn one_stage(r: f64, h: f64) -> Option<Vec<Stage>> {
 }
 
 fn cases() -> Vec<Case> {
-    let paper = RenderSpec {
-        width: 512,
-        height: 512,
-        shape: Shape::Circle {
-            cx: 256.3,
-            cy: 255.6,
-            r: 200.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Profile { half_width: 10.0 },
-        foreground: 1.0,
-        background: 0.0,
-        bits: Some(8),
-        ..RenderSpec::default()
-    };
+    let paper = presets::paper_disc(10.0);
     let paper_init = InitialCurve::Circle {
         cx: 255.0,
         cy: 257.0,
@@ -69,27 +55,7 @@ fn cases() -> Vec<Case> {
         cy: 198.0,
         r: 145.0,
     };
-    let star = RenderSpec {
-        width: 1024,
-        height: 1024,
-        shape: Shape::Star {
-            cx: 512.3,
-            cy: 511.6,
-            r0: 300.0,
-            amplitude: 0.2,
-            lobes: 5,
-            phase: 0.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 3,
-        bits: Some(8),
-        ..RenderSpec::default()
-    };
+    let star = presets::star_1024();
     let mut out = Vec::new();
     for h in [10.0, 20.0, 40.0, 100.0] {
         out.push(Case {

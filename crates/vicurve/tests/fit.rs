@@ -5,7 +5,7 @@
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::truth::{evaluate, ErrorStats, Shape};
 use vicurve::virtual_image::Kind;
 
@@ -53,21 +53,7 @@ fn disc_spec(r: f64, method: Method, noise: f64) -> RenderSpec {
 /// and an RMS of 1e-3 (small elements) to 4e-4 px (large ones).
 #[test]
 fn paper_disc_beats_the_paper() {
-    let spec = RenderSpec {
-        width: 512,
-        height: 512,
-        shape: Shape::Circle {
-            cx: 256.3,
-            cy: 255.6,
-            r: 200.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Profile { half_width: 10.0 },
-        foreground: 1.0,
-        background: 0.0,
-        bits: Some(8),
-        ..RenderSpec::default()
-    };
+    let spec = presets::paper_disc(10.0);
     let init = InitialCurve::Circle {
         cx: 255.0,
         cy: 257.0,
@@ -165,27 +151,7 @@ fn exact_coverage_disc_with_ten_percent_noise() {
 #[test]
 fn star_from_an_offset_circle() {
     let (cx, cy) = (512.3, 511.6);
-    let spec = RenderSpec {
-        width: 1024,
-        height: 1024,
-        shape: Shape::Star {
-            cx,
-            cy,
-            r0: 300.0,
-            amplitude: 0.2,
-            lobes: 5,
-            phase: 0.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 3,
-        bits: Some(8),
-        ..RenderSpec::default()
-    };
+    let spec = presets::star_1024();
     let init = InitialCurve::Circle {
         cx: cx + 10.0,
         cy,

@@ -16,6 +16,7 @@
 pub mod blur;
 pub mod coverage;
 pub mod noise;
+pub mod presets;
 pub mod profile;
 pub mod shapes;
 
