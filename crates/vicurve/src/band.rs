@@ -143,8 +143,10 @@ impl Band {
         let gy1 = ((bb[3] + reach).ceil().min(height as f64 - 1.0)).max(0.0) as usize;
         let gw = gx1 + 1 - gx0;
         let gh = gy1 + 1 - gy0;
-        let mut best_d2 = vec![f64::INFINITY; gw * gh];
-        let mut best_u = vec![0.0; gw * gh];
+        // Per cell: squared distance to the closest chord and the parameter
+        // of its foot, as f32 (a starting point for Newton; half the memory
+        // to clear and fault in than f64).
+        let mut best = vec![(f32::INFINITY, 0.0f32); gw * gh];
         let dir = |k: usize| {
             let a = verts[k % verts.len()];
             let b = verts[(k + 1) % verts.len()];
@@ -222,9 +224,8 @@ impl Band {
                     let ey = py - t * d[1];
                     let d2 = ex * ex + ey * ey;
                     let cell = row + x - gx0;
-                    if d2 < best_d2[cell] {
-                        best_d2[cell] = d2;
-                        best_u[cell] = ua + t * (ub - ua);
+                    if (d2 as f32) < best[cell].0 {
+                        best[cell] = (d2 as f32, (ua + t * (ub - ua)) as f32);
                     }
                 }
             }
@@ -247,12 +248,13 @@ impl Band {
                 let mut out = Vec::new();
                 for i in 0..gw {
                     let cell = j * gw + i;
-                    if best_d2[cell] > cutoff2 {
+                    let (d2, u0) = best[cell];
+                    if f64::from(d2) > cutoff2 {
                         continue;
                     }
                     let x = (gx0 + i) as f64;
                     let y = (gy0 + j) as f64;
-                    let pr = curve.project(x, y, best_u[cell]);
+                    let pr = curve.project(x, y, f64::from(u0));
                     let jacobian = 1.0 - pr.curvature * pr.r;
                     if pr.at_end || pr.r.abs() >= half_width || jacobian <= MIN_JACOBIAN {
                         continue;
