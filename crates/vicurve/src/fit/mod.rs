@@ -103,38 +103,40 @@ pub fn measure_from(
             let length = current.param_length();
             let basis = Basis::new(p, stage.element_count(length, min_el), length, closed)?;
             let first_band = last.is_none() && iterations == 0;
-            let band = match Band::build(&current, &basis, r, config.kind, width, height) {
-                Ok(b) => b,
-                Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
-                    if first_band && auto && !is_last {
-                        skipped.push(format!("R = {r} px: {e}"));
-                        continue 'stages;
+            // Coarse stages (all but the last) use half the pixels.
+            let band =
+                match Band::build_with(&current, &basis, r, config.kind, width, height, !is_last) {
+                    Ok(b) => b,
+                    Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
+                        if first_band && auto && !is_last {
+                            skipped.push(format!("R = {r} px: {e}"));
+                            continue 'stages;
+                        }
+                        if first_band {
+                            return Err(e);
+                        }
+                        let (x, y) = match e {
+                            Error::BandOutsideImage { x, y, .. }
+                            | Error::CurveOutsideImage { x, y, .. } => (x, y),
+                            _ => (f64::NAN, f64::NAN),
+                        };
+                        outcome = Outcome::Diverged {
+                            divergence: Divergence::LeftImage { x, y },
+                        };
+                        reports.push(report(
+                            stage,
+                            &basis,
+                            0,
+                            iterations,
+                            rereferences,
+                            step,
+                            started,
+                            outcome,
+                        ));
+                        break 'stages;
                     }
-                    if first_band {
-                        return Err(e);
-                    }
-                    let (x, y) = match e {
-                        Error::BandOutsideImage { x, y, .. }
-                        | Error::CurveOutsideImage { x, y, .. } => (x, y),
-                        _ => (f64::NAN, f64::NAN),
-                    };
-                    outcome = Outcome::Diverged {
-                        divergence: Divergence::LeftImage { x, y },
-                    };
-                    reports.push(report(
-                        stage,
-                        &basis,
-                        0,
-                        iterations,
-                        rereferences,
-                        step,
-                        started,
-                        outcome,
-                    ));
-                    break 'stages;
-                }
-                Err(e) => return Err(e),
-            };
+                    Err(e) => return Err(e),
+                };
             let band_pixels = band.len();
             let mut corr = match Correlation::new(band, basis.clone()) {
                 Ok(c) => c,
