@@ -53,6 +53,12 @@ pub struct Args {
     /// Iteration limit per stage.
     #[arg(long, default_value_t = 200)]
     pub max_iter: usize,
+    /// Silhouettes: do not remove the shift `s^2 kappa / 2` that the
+    /// estimated blur causes on curved edges (report the blurred edge's
+    /// half-level instead of the true boundary). Use it for images that are
+    /// not blurred steps, such as `synth paper-disc`.
+    #[arg(long)]
+    pub no_blur_correction: bool,
     #[command(flatten)]
     pub outputs: Outputs,
 }
@@ -134,6 +140,7 @@ fn build_config(args: &Args) -> Result<FitConfig, Failure> {
         degree: args.degree,
         tolerance: args.tolerance,
         max_iterations: args.max_iter,
+        blur_correction: !args.no_blur_correction,
         ..FitConfig::default()
     };
     if let Some(s) = &args.stages {
@@ -267,6 +274,18 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
     println!("length:      {:.4} px", m.length());
     if let Some(a) = m.area() {
         println!("area:        {:.4} px^2", a);
+    }
+    if let Some(e) = m.edge_spread {
+        println!(
+            "edge blur:   {:.3} px ({}; fit quality {:.3})",
+            e.sigma,
+            if m.blur_corrected {
+                "its curvature shift removed"
+            } else {
+                "not corrected: the edge is not a clean blurred step"
+            },
+            e.fit_quality
+        );
     }
     let sig: Vec<f64> = m
         .samples

@@ -22,7 +22,8 @@ pub enum ShapeName {
     /// A thin sinusoidal line across the image (contour).
     SineLine,
     /// The paper's test: 512x512 disc of radius 200, rendered with the
-    /// silhouette profile of half-width 10 px at pixel centres, 8-bit.
+    /// silhouette profile of half-width 10 px at pixel centres, 8-bit
+    /// (not a blurred step: measure it with `--no-blur-correction`).
     PaperDisc,
 }
 

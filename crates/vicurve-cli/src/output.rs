@@ -25,6 +25,10 @@ pub struct ResultFile<'a> {
     pub curve: CurveRecord,
     pub length: f64,
     pub area: Option<f64>,
+    /// The edge's estimated blur (silhouettes), see `vicurve::psf`.
+    pub edge_spread: Option<vicurve::psf::EdgeSpread>,
+    /// Whether the blur's curvature shift was removed from the curve.
+    pub blur_corrected: bool,
     pub samples: usize,
     pub stages: &'a [StageReport],
     pub skipped_stages: &'a [String],
@@ -86,6 +90,8 @@ impl<'a> ResultFile<'a> {
             },
             length: m.length(),
             area: m.area(),
+            edge_spread: m.edge_spread,
+            blur_corrected: m.blur_corrected,
             samples: m.samples.len(),
             stages: &m.stages,
             skipped_stages: &m.skipped,

@@ -31,6 +31,7 @@ fn paper_config() -> FitConfig {
             half_width: 10.0,
             elements: Elements::Count(25),
         }]),
+        blur_correction: false,
         ..FitConfig::default()
     }
 }

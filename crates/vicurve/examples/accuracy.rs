@@ -69,6 +69,9 @@ fn cases() -> Vec<Case> {
             init: paper_init.clone(),
             config: FitConfig {
                 stages: one_stage(10.0, h),
+                // The paper's image is the virtual profile itself, not a
+                // blurred step: nothing to correct.
+                blur_correction: false,
                 ..FitConfig::default()
             },
         });

@@ -70,6 +70,9 @@ fn paper_disc_beats_the_paper() {
         let config = FitConfig {
             degree,
             stages: stages(&[(10.0, Elements::Length(h))]),
+            // The paper's image is the virtual profile itself, not a
+            // blurred step: nothing to correct.
+            blur_correction: false,
             ..FitConfig::default()
         };
         let (m, s) = run(&spec, init.clone(), config);
@@ -158,24 +161,23 @@ fn star_from_an_offset_circle() {
         r: 300.0,
     };
     let (m, s) = run(&spec, init, FitConfig::default());
-    let blurred = against_blurred_edge(&m, &spec);
     println!(
-        "star: bias {:+.2e} scatter {:.2e} max {:.2e} ({} it); against the blurred edge: bias {:+.2e} scatter {:.2e}",
-        s.bias, s.scatter, s.max_abs, m.iterations(), blurred.0, blurred.1
+        "star: bias {:+.2e} scatter {:.2e} max {:.2e} ({} it), edge spread {:?}",
+        s.bias,
+        s.scatter,
+        s.max_abs,
+        m.iterations(),
+        m.edge_spread.map(|e| e.sigma)
     );
     assert_eq!(m.outcome, Outcome::Converged);
+    assert!(m.blur_corrected);
     assert!(s.max_abs <= 0.05, "max {}", s.max_abs);
-    // Blur moves a curved edge by sigma^2 kappa / 2 (here -7e-3 px at the
-    // lobes to +1.1e-2 in the valleys); the engine measures the blurred edge
-    // to 5e-3 px; the geometric star to 1e-2 px until the virtual image
-    // models the blur. Measured: 8.1e-3 raw, 6.6e-3 against the blurred
-    // edge (1 % noise on 10 px elements and grid aliasing make the rest).
-    assert!(
-        blurred.1 <= 8e-3,
-        "scatter against the blurred edge {}",
-        blurred.1
-    );
-    assert!(s.scatter <= 1e-2, "scatter {}", s.scatter);
+    assert!(s.bias.abs() <= 2e-3, "bias {}", s.bias);
+    // 1.7e-3 px without noise; with 1 % noise the last stage needs 10 px
+    // elements for the star's valleys (20 px ones leave 1e-2 px of shape
+    // error), and their noise makes 6.7e-3 px (the predicted sigma says
+    // 6.4e-3): the 5e-3 is not met at this noise level.
+    assert!(s.scatter <= 8e-3, "scatter {}", s.scatter);
 }
 
 /// Bias and scatter of the measured points against the edge of the blurred
@@ -222,10 +224,11 @@ fn blur1(shape: Shape, kind: Kind, fg: f64, bg: f64) -> RenderSpec {
     }
 }
 
-/// Converges, finds the polarity, and measures the blurred edge or line to
-/// 8e-3 px (scatter; see [`against_blurred_edge`]; edges reach 1e-3 to
-/// 2e-3, thin lines 6e-3: the bell profile of half-width 2 px fits a 3 px
-/// line poorly); the raw figures against the geometric curve are printed.
+/// Converges, finds the polarity, and measures within 5e-3 px (scatter):
+/// silhouettes against the true curve (the blur's curvature shift is
+/// removed, see `vicurve::psf`), thin lines against the blurred line (not
+/// corrected yet: the bell profile of half-width 2 px also fits a 3 px line
+/// poorly, 6e-3 px); both figures are printed.
 fn check(
     name: &str,
     spec: &RenderSpec,
@@ -237,13 +240,20 @@ fn check(
     let c = m.stages.last().unwrap().c;
     let blurred = against_blurred_edge(&m, spec);
     println!(
-        "{name}: bias {:+.2e} scatter {:.2e} max {:.2e} c {c:+.3}; against the blurred edge: bias {:+.2e} scatter {:.2e}",
-        s.bias, s.scatter, s.max_abs, blurred.0, blurred.1
+        "{name}: bias {:+.2e} scatter {:.2e} max {:.2e} c {c:+.3}; against the blurred edge: bias {:+.2e} scatter {:.2e}; edge spread {:?}",
+        s.bias, s.scatter, s.max_abs, blurred.0, blurred.1, m.edge_spread.map(|e| e.sigma)
     );
     assert_eq!(m.outcome, Outcome::Converged, "{name}");
-    assert!(blurred.1 <= 8e-3, "{name}: scatter {}", blurred.1);
-    assert!(s.max_abs <= 0.05, "{name}: max {}", s.max_abs);
     assert_eq!(c > 0.0, expect_positive, "{name}: polarity (c = {c})");
+    assert!(s.max_abs <= 0.05, "{name}: max {}", s.max_abs);
+    match spec.kind {
+        Kind::Silhouette => {
+            assert!(m.blur_corrected, "{name}: blur correction not applied");
+            assert!(s.scatter <= 5e-3, "{name}: scatter {}", s.scatter);
+            assert!(s.bias.abs() <= 2e-3, "{name}: bias {}", s.bias);
+        }
+        Kind::Contour => assert!(blurred.1 <= 8e-3, "{name}: scatter {}", blurred.1),
+    }
 }
 
 #[test]
@@ -387,17 +397,15 @@ fn ellipse_with_all_degrees() {
             ..FitConfig::default()
         };
         let (m, s) = run(&spec, init, config);
-        let blurred = against_blurred_edge(&m, &spec);
         println!(
-            "ellipse p = {degree}: bias {:+.2e} scatter {:.2e} max {:.2e}; against the blurred edge: scatter {:.2e}",
-            s.bias, s.scatter, s.max_abs, blurred.1
+            "ellipse p = {degree}: bias {:+.2e} scatter {:.2e} max {:.2e}",
+            s.bias, s.scatter, s.max_abs
         );
         assert_eq!(m.outcome, Outcome::Converged, "degree {degree}");
         assert!(s.max_abs <= 0.05, "degree {degree}: max {}", s.max_abs);
-        assert!(
-            blurred.1 <= 8e-3,
-            "degree {degree}: scatter against the blurred edge {}",
-            blurred.1
-        );
+        assert!(s.bias.abs() <= 2e-3, "degree {degree}: bias {}", s.bias);
+        // Quadratic elements follow the ellipse's curvature less closely.
+        let bound = if degree == 2 { 8e-3 } else { 5e-3 };
+        assert!(s.scatter <= bound, "degree {degree}: scatter {}", s.scatter);
     }
 }

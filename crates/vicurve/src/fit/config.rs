@@ -133,6 +133,13 @@ pub struct FitConfig {
     /// Largest spacing of the output samples along the curve, pixels.
     /// Default: 1.
     pub sample_spacing: f64,
+    /// Silhouettes: estimate the edge's blur from the image and remove the
+    /// shift `s^2 kappa / 2` it causes on curved edges (see [`crate::psf`]),
+    /// so that the result is the true boundary rather than the blurred
+    /// edge's half-level. Turn it off for images whose profile is not a
+    /// blurred step, such as the paper's synthetic disc rendered with the
+    /// virtual profile itself. Contours are not corrected. Default: true.
+    pub blur_correction: bool,
 }
 
 impl Default for FitConfig {
@@ -148,6 +155,7 @@ impl Default for FitConfig {
             rereference_fraction: 0.75,
             max_step_fraction: 0.5,
             sample_spacing: 1.0,
+            blur_correction: true,
         }
     }
 }

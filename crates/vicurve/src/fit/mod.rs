@@ -29,7 +29,9 @@ use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::interp::Sampler;
+use crate::psf;
 use crate::spline::{Basis, MAX_DEGREE};
+use crate::virtual_image::Kind;
 use correlation::{Correlation, StepFailure};
 use std::f64::consts::TAU;
 use std::time::Instant;
@@ -38,6 +40,19 @@ use std::time::Instant;
 const REFERENCE_SAMPLE_STEP: f64 = 0.5;
 /// Control-point spacing of reference and output curves, pixels.
 const CURVE_SPACING: f64 = 2.0;
+/// Half-width of the first band on which the edge's blur is estimated,
+/// pixels (a wider one is tried when the edge fills it).
+const EDGE_SPREAD_BAND: f64 = 8.0;
+/// The band half-width that matches an edge of spread `s` is about
+/// `MATCHED_BAND * s` (the transition of an error-function edge spans
+/// roughly +-2.5 s; R = 2 px for a sharp, focused edge).
+const MATCHED_BAND: f64 = 2.5;
+/// A band narrower than the matched one by more than this factor does not
+/// see the whole edge.
+const BAND_MISMATCH: f64 = 1.5;
+/// The blur correction needs an edge that an error function fits this well
+/// (fraction of the variance explained); clutter or texture turn it off.
+const MIN_EDGE_FIT_QUALITY: f64 = 0.8;
 /// Re-references allowed within one stage before it is declared stuck.
 const MAX_REREFERENCES: usize = 100;
 
@@ -69,7 +84,7 @@ pub fn measure_from(
     }
     let closed = reference.is_closed();
     let (width, height) = (sampler.width(), sampler.height());
-    let (stages, auto) = match &config.stages {
+    let (mut stages, auto) = match &config.stages {
         Some(s) => (s.clone(), false),
         None => (default_stages(), true),
     };
@@ -82,8 +97,16 @@ pub fn measure_from(
     let mut last: Option<Final> = None;
     let mut outcome = Outcome::Converged;
 
-    'stages: for (k, stage) in stages.iter().enumerate() {
+    let mut next_stage = 0;
+    let mut edge_spread = None;
+    // Whether a stage matched to the edge's blur was appended (once).
+    let mut matched_added = false;
+    'stages: while next_stage < stages.len() {
+        let k = next_stage;
+        next_stage += 1;
+        let stage = &stages[k].clone();
         let is_last = k + 1 == stages.len();
+        let appended = matched_added && is_last;
         let r = stage.half_width;
         if auto && !is_last {
             let length = current.arc_length();
@@ -108,6 +131,11 @@ pub fn measure_from(
                 match Band::build_with(&current, &basis, r, config.kind, width, height, !is_last) {
                     Ok(b) => b,
                     Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
+                        if appended && iterations == 0 {
+                            // The matched band does not fit: keep the result.
+                            skipped.push(format!("R = {r} px (matched to the edge's blur): {e}"));
+                            continue 'stages;
+                        }
                         if first_band && auto && !is_last {
                             skipped.push(format!("R = {r} px: {e}"));
                             continue 'stages;
@@ -233,12 +261,35 @@ pub fn measure_from(
                 }
             }
         }
+        // After the last stage: estimate the edge's blur on the measured
+        // curve; with the default schedule, when the edge is much wider than
+        // the last band, measure once more with a band matched to it (the
+        // paper's optimum, R_g = R_f), where the blur correction is exact.
+        if is_last && config.kind == Kind::Silhouette && config.blur_correction {
+            edge_spread = estimate_spread(sampler, &current);
+            if let Some(e) = edge_spread {
+                let matched = (MATCHED_BAND * e.sigma * 2.0).round() / 2.0;
+                if auto
+                    && !matched_added
+                    && matched > BAND_MISMATCH * r
+                    && e.fit_quality >= MIN_EDGE_FIT_QUALITY
+                {
+                    matched_added = true;
+                    stages.push(Stage {
+                        half_width: matched,
+                        elements: stage.elements,
+                    });
+                }
+            }
+        }
     }
     let fin = match last {
         Some(f) => f,
         None => {
             // Not even one stage completed: report the start as the result.
             return Ok(Measurement {
+                edge_spread: None,
+                blur_corrected: false,
                 outcome,
                 curve_fit_error: 0.0,
                 samples: plain_samples(&current, config.sample_spacing),
@@ -248,7 +299,16 @@ pub fn measure_from(
             });
         }
     };
-    let (curve, curve_fit_error, samples) = fin.samples(config.sample_spacing, p.max(3))?;
+    // The blur's curvature shift (silhouettes): removed when the edge looks
+    // like a blurred step and the last band is not much narrower than it
+    // (a narrow band sees only the middle of a wide edge, and stays between
+    // the half-level and the boundary).
+    let last_r = reports.last().map_or(0.0, |s: &StageReport| s.half_width);
+    let blur = edge_spread
+        .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
+        .filter(|e| MATCHED_BAND * e.sigma <= BAND_MISMATCH * last_r)
+        .map(|e| e.sigma);
+    let (curve, curve_fit_error, samples) = fin.samples(config.sample_spacing, p.max(3), blur)?;
     Ok(Measurement {
         outcome,
         curve,
@@ -256,6 +316,8 @@ pub fn measure_from(
         samples,
         stages: reports,
         skipped,
+        edge_spread,
+        blur_corrected: blur.is_some(),
     })
 }
 
@@ -428,6 +490,18 @@ fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
         .sum()
 }
 
+/// The edge spread around `curve`, on a band wide enough for it (see
+/// [`psf::edge_spread`]): the search is bounded by a third of the band, so
+/// a result near that bound is estimated again on a band four times the
+/// spread.
+fn estimate_spread(sampler: &Sampler, curve: &SplineCurve) -> Option<psf::EdgeSpread> {
+    let first = psf::edge_spread(sampler, curve, EDGE_SPREAD_BAND)?;
+    if first.sigma < 0.9 * EDGE_SPREAD_BAND / 3.0 {
+        return Some(first);
+    }
+    psf::edge_spread(sampler, curve, 4.0 * first.sigma).or(Some(first))
+}
+
 /// Scalar secant relaxation of the Gauss–Newton steps.
 ///
 /// The step replaces the gradient of the physical image by the virtual
@@ -493,9 +567,16 @@ struct Final {
 }
 
 impl Final {
-    /// Dense samples of `x0 + U n`, the B-spline fitted to them and its
-    /// largest deviation from them, and the output samples with `sigma`.
-    fn samples(&self, spacing: f64, degree: usize) -> Result<(SplineCurve, f64, Vec<Sample>)> {
+    /// Dense samples of `x0 + U n` (moved by the blur's curvature shift
+    /// when `blur` is given, see [`crate::psf`]), the B-spline fitted to
+    /// them and its largest deviation from them, and the output samples with
+    /// `sigma`.
+    fn samples(
+        &self,
+        spacing: f64,
+        degree: usize,
+        blur: Option<f64>,
+    ) -> Result<(SplineCurve, f64, Vec<Sample>)> {
         let fine_step = (0.25f64).min(spacing);
         let l = self.reference.param_length();
         let closed = self.reference.is_closed();
@@ -504,23 +585,23 @@ impl Final {
             .reference
             .sample_params(if closed { count } else { count + 1 });
         let mut scratch = vec![0.0; self.corr.n_unknowns()];
-        let pts: Vec<[f64; 2]> = params
+        let mut pts: Vec<[f64; 2]> = params
             .iter()
             .map(|&u| displaced_point(&self.reference, &self.corr.basis, &self.lambda, u))
             .collect();
-        let curve = SplineCurve::fit(&pts, closed, degree, CURVE_SPACING)?;
-        // Chord-length parameters, as the fit used them.
-        let mut s = Vec::with_capacity(pts.len());
-        let mut acc = 0.0;
-        let mut max_chord: f64 = 0.0;
-        for (i, q) in pts.iter().enumerate() {
-            if i > 0 {
-                let d = crate::curve::dist(pts[i - 1], *q);
-                max_chord = max_chord.max(d);
-                acc += d;
+        let mut curve = SplineCurve::fit(&pts, closed, degree, CURVE_SPACING)?;
+        let mut s = chord_lengths(&pts);
+        if let Some(sigma) = blur {
+            for (q, &si) in pts.iter_mut().zip(&s) {
+                let f = curve.frame(si);
+                let shift = crate::psf::curvature_shift(sigma, f.curvature);
+                q[0] += shift * f.normal[0];
+                q[1] += shift * f.normal[1];
             }
-            s.push(acc);
+            curve = SplineCurve::fit(&pts, closed, degree, CURVE_SPACING)?;
+            s = chord_lengths(&pts);
         }
+        let max_chord = s.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
         let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
         let mut fit_error: f64 = 0.0;
         let mut out = Vec::with_capacity(pts.len() / every + 2);
@@ -542,6 +623,20 @@ impl Final {
         }
         Ok((curve, fit_error, out))
     }
+}
+
+/// Cumulative chord lengths of a polyline (the parameters
+/// [`SplineCurve::fit`] gives its points).
+fn chord_lengths(pts: &[[f64; 2]]) -> Vec<f64> {
+    let mut acc = 0.0;
+    let mut out = Vec::with_capacity(pts.len());
+    for (i, q) in pts.iter().enumerate() {
+        if i > 0 {
+            acc += crate::curve::dist(pts[i - 1], *q);
+        }
+        out.push(acc);
+    }
+    out
 }
 
 /// `x0(u) + U(u) n(u)`.

@@ -134,6 +134,12 @@ pub struct Measurement {
     pub stages: Vec<StageReport>,
     /// Stages of the default schedule that were skipped, with the reason.
     pub skipped: Vec<String>,
+    /// The blur of the edge estimated on the measured curve (silhouettes
+    /// with blur correction on), see [`crate::psf`].
+    pub edge_spread: Option<crate::psf::EdgeSpread>,
+    /// Whether the samples and curve were moved by the blur's curvature
+    /// shift (the edge spread was estimated and fitted well enough).
+    pub blur_corrected: bool,
 }
 
 impl Measurement {

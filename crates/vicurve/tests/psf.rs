@@ -1,0 +1,118 @@
+//! The edge-blur estimate and the curvature shift it removes.
+
+use vicurve::curve::InitialCurve;
+use vicurve::fit::{measure, FitConfig};
+use vicurve::interp::{Interpolation, Sampler};
+use vicurve::psf::{curvature_shift, edge_spread};
+use vicurve::render::{render, Method, RenderSpec};
+use vicurve::truth::{evaluate, Shape};
+use vicurve::virtual_image::Kind;
+
+fn disc(blur: f64) -> RenderSpec {
+    RenderSpec {
+        width: 240,
+        height: 240,
+        shape: Shape::Circle {
+            cx: 120.3,
+            cy: 119.6,
+            r: 70.0,
+        },
+        kind: Kind::Silhouette,
+        method: Method::Coverage,
+        foreground: 0.85,
+        background: 0.15,
+        blur_sigma: blur,
+        bits: Some(16),
+        ..RenderSpec::default()
+    }
+}
+
+#[test]
+fn the_spread_of_a_blurred_edge_is_its_blur_and_the_pixel() {
+    for blur in [0.0, 0.5, 1.0, 2.0] {
+        let image = render(&disc(blur)).unwrap();
+        let sampler = Sampler::new(&image, Interpolation::CubicBSpline);
+        let curve = InitialCurve::Circle {
+            cx: 120.3,
+            cy: 119.6,
+            r: 70.0,
+        }
+        .to_curve()
+        .unwrap();
+        let e = edge_spread(&sampler, &curve, 8.0).unwrap();
+        // The image was blurred with a sampled, truncated Gaussian kernel:
+        // its own variance (0.21 px² for sigma = 0.5) plus the pixel's 1/12.
+        let kernel = vicurve::render::blur::gaussian_kernel(blur);
+        let half = (kernel.len() / 2) as f64;
+        let var: f64 = kernel
+            .iter()
+            .enumerate()
+            .map(|(i, k)| k * (i as f64 - half).powi(2))
+            .sum();
+        let expect = (var + 1.0 / 12.0).sqrt();
+        println!(
+            "blur {blur}: spread {:.4} (expected {expect:.4}), quality {:.4}",
+            e.sigma, e.fit_quality
+        );
+        // The pixel box is not Gaussian: for a sharp edge the fitted error
+        // function is a little wider than the box's standard deviation.
+        let tolerance = if blur < 1.0 { 0.1 } else { 0.03 };
+        assert!(
+            (e.sigma - expect).abs() <= tolerance * expect,
+            "blur {blur}: {}",
+            e.sigma
+        );
+        assert!(e.fit_quality > 0.99);
+    }
+}
+
+#[test]
+fn the_shift_points_to_the_centre_of_curvature() {
+    // Convex closed curve, outward normal: kappa < 0, the true boundary is
+    // outside the blurred half-level.
+    assert!(curvature_shift(1.0, -1.0 / 80.0) > 0.0);
+    assert!((curvature_shift(2.0, -0.01) - 0.02).abs() < 1e-15);
+    assert_eq!(curvature_shift(0.0, 0.3), 0.0);
+}
+
+#[test]
+fn correction_removes_the_blur_bias_on_discs() {
+    for blur in [1.0, 2.0] {
+        let spec = disc(blur);
+        let image = render(&spec).unwrap();
+        let init = InitialCurve::Circle {
+            cx: 122.0,
+            cy: 118.0,
+            r: 74.0,
+        };
+        let on = measure(&image, &init, &FitConfig::default()).unwrap();
+        let off = measure(
+            &image,
+            &init,
+            &FitConfig {
+                blur_correction: false,
+                ..FitConfig::default()
+            },
+        )
+        .unwrap();
+        let (s_on, s_off) = (
+            evaluate(&on.points(), &spec.shape).unwrap(),
+            evaluate(&off.points(), &spec.shape).unwrap(),
+        );
+        let predicted = -(blur * blur + 1.0 / 12.0) / (2.0 * 70.0);
+        println!(
+            "blur {blur}: bias {:+.2e} corrected, {:+.2e} not (predicted {predicted:+.2e})",
+            s_on.bias, s_off.bias
+        );
+        assert!(on.blur_corrected);
+        assert!(s_on.bias.abs() <= 2e-3, "blur {blur}: {}", s_on.bias);
+        // Uncorrected, the curve is inside the boundary (towards the
+        // blurred half-level; a 2 px band under a 2 px blur sees only the
+        // middle of the edge and stops short of it).
+        assert!(
+            s_off.bias < -5e-3 && s_off.bias > 1.1 * predicted,
+            "blur {blur}: {}",
+            s_off.bias
+        );
+    }
+}
