@@ -24,13 +24,17 @@ use crate::spline::Basis;
 use crate::virtual_image::Kind;
 use serde::{Deserialize, Serialize};
 
-/// The blur of an edge as estimated by [`edge_spread`].
+/// The blur of an edge or a line as estimated by [`edge_spread`] or
+/// [`line_spread`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EdgeSpread {
     /// Standard deviation `s` of the edge's spread function across the
     /// curve, pixels (the optics' blur and the pixel's own 1/12 px² in
     /// quadrature).
     pub sigma: f64,
+    /// Thin lines: the line's full width before blurring, pixels (`None`
+    /// for edges).
+    pub line_width: Option<f64>,
     /// Fraction of the pixel values' variance the fitted edge explains (1:
     /// a perfect error-function edge).
     pub fit_quality: f64,
@@ -55,37 +59,7 @@ fn phi_cdf(x: f64) -> f64 {
 /// Returns `None` when the band cannot be built (curve near the border) or
 /// holds too few pixels.
 pub fn edge_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> Option<EdgeSpread> {
-    let basis = Basis::new(
-        1,
-        if curve.is_closed() { 2 } else { 1 },
-        curve.param_length(),
-        curve.is_closed(),
-    )
-    .ok()?;
-    let band = Band::build(
-        curve,
-        &basis,
-        half_width,
-        Kind::Silhouette,
-        sampler.width(),
-        sampler.height(),
-    )
-    .ok()?;
-    if band.len() < 50 {
-        return None;
-    }
-    // Pixel centres sit on the sampling grid: the interpolant returns the
-    // pixel values themselves there.
-    // A few thousand pixels determine one number well; more only cost time
-    // (the search evaluates the model ~30 times on each).
-    let stride = band.len().div_ceil(MAX_PIXELS).max(1);
-    let data: Vec<(f64, f64)> = band
-        .positions()
-        .iter()
-        .zip(band.r())
-        .step_by(stride)
-        .filter_map(|(p, &r)| sampler.value(p[0], p[1]).map(|f| (r, f)))
-        .collect();
+    let data = band_data(sampler, curve, half_width, MAX_PIXELS)?;
     let n = data.len() as f64;
     let mean = data.iter().map(|d| d.1).sum::<f64>() / n;
     let total = data.iter().map(|d| (d.1 - mean).powi(2)).sum::<f64>();
@@ -111,34 +85,131 @@ pub fn edge_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
         let c = (n * sfg - sg * sf) / det;
         (sff - a * sf - c * sfg).max(0.0)
     };
-    // Golden-section search on log s.
-    let (mut lo, mut hi) = (0.05f64.ln(), (half_width / 3.0).max(0.1).ln());
+    // Golden-section search on log s; 30 steps shrink its interval by
+    // 0.618^30 ~ 5e-7.
+    let s = golden(0.05f64.ln(), (half_width / 3.0).max(0.1).ln(), 30, |x| {
+        ssr(x.exp())
+    })
+    .exp();
+    Some(EdgeSpread {
+        sigma: s,
+        line_width: None,
+        fit_quality: 1.0 - ssr(s) / total,
+        pixels: data.len(),
+    })
+}
+
+/// Minimum of `f` over `[lo, hi]` by golden-section search (`steps`
+/// steps); `f` unimodal.
+fn golden(lo: f64, hi: f64, steps: usize, f: impl Fn(f64) -> f64) -> f64 {
     let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut lo, mut hi) = (lo, hi);
     let mut x1 = hi - ratio * (hi - lo);
     let mut x2 = lo + ratio * (hi - lo);
-    let (mut f1, mut f2) = (ssr(x1.exp()), ssr(x2.exp()));
-    // 30 golden-section steps shrink the interval of log s by 0.618^30 ~ 5e-7.
-    for _ in 0..30 {
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..steps {
         if f1 <= f2 {
             hi = x2;
             x2 = x1;
             f2 = f1;
             x1 = hi - ratio * (hi - lo);
-            f1 = ssr(x1.exp());
+            f1 = f(x1);
         } else {
             lo = x1;
             x1 = x2;
             f1 = f2;
             x2 = lo + ratio * (hi - lo);
-            f2 = ssr(x2.exp());
+            f2 = f(x2);
         }
     }
-    let s = (0.5 * (lo + hi)).exp();
+    0.5 * (lo + hi)
+}
+
+/// Estimate the blur `s` and the width `w` of a thin line around `curve`
+/// (a measured contour) by fitting `f = A + C [Phi((r + w/2)/s) -
+/// Phi((r - w/2)/s)]` across it (`A`, `C` by linear least squares; `s` and
+/// `w` by nested golden-section searches). For a line much thinner
+/// than its blur, `w` and `s` are hard to tell apart (the profile is then
+/// a Gaussian of variance `s^2 + w^2 / 12`): the estimate is returned with
+/// its fit quality and the caller decides.
+pub fn line_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> Option<EdgeSpread> {
+    let data = band_data(sampler, curve, half_width, 1500)?;
+    let n = data.len() as f64;
+    let mean = data.iter().map(|d| d.1).sum::<f64>() / n;
+    let total = data.iter().map(|d| (d.1 - mean).powi(2)).sum::<f64>();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let ssr = |s: f64, w: f64| -> f64 {
+        let (mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for &(r, f) in &data {
+            let g = phi_cdf((r + 0.5 * w) / s) - phi_cdf((r - 0.5 * w) / s);
+            sg += g;
+            sgg += g * g;
+            sf += f;
+            sfg += f * g;
+            sff += f * f;
+        }
+        let det = n * sgg - sg * sg;
+        if det.abs() < 1e-300 {
+            return f64::INFINITY;
+        }
+        let a = (sgg * sf - sg * sfg) / det;
+        let c = (n * sfg - sg * sf) / det;
+        (sff - a * sf - c * sfg).max(0.0)
+    };
+    let (s_lo, s_hi) = (0.05f64.ln(), (half_width / 3.0).max(0.1).ln());
+    // Nested searches (w outside, s inside): the two trade off against
+    // each other along a narrow valley, where alternating searches crawl.
+    let best_s = |w: f64| golden(s_lo, s_hi, 18, |x| ssr(x.exp(), w)).exp();
+    let w = golden(0.05, half_width, 18, |w| ssr(best_s(w), w));
+    let s = best_s(w);
     Some(EdgeSpread {
         sigma: s,
-        fit_quality: 1.0 - ssr(s) / total,
+        line_width: Some(w),
+        fit_quality: 1.0 - ssr(s, w) / total,
         pixels: data.len(),
     })
+}
+
+/// `(r, f)` for the pixels within `half_width` of `curve` (at most about
+/// `max` of them, a regular subsample).
+fn band_data(
+    sampler: &Sampler,
+    curve: &SplineCurve,
+    half_width: f64,
+    max: usize,
+) -> Option<Vec<(f64, f64)>> {
+    let basis = Basis::new(
+        1,
+        if curve.is_closed() { 2 } else { 1 },
+        curve.param_length(),
+        curve.is_closed(),
+    )
+    .ok()?;
+    let band = Band::build(
+        curve,
+        &basis,
+        half_width,
+        Kind::Silhouette,
+        sampler.width(),
+        sampler.height(),
+    )
+    .ok()?;
+    if band.len() < 50 {
+        return None;
+    }
+    // Pixel centres sit on the sampling grid: the interpolant returns the
+    // pixel values themselves there.
+    let stride = band.len().div_ceil(max).max(1);
+    Some(
+        band.positions()
+            .iter()
+            .zip(band.r())
+            .step_by(stride)
+            .filter_map(|(p, &r)| sampler.value(p[0], p[1]).map(|f| (r, f)))
+            .collect(),
+    )
 }
 
 /// The displacement, along the unit normal, from the half-level of a

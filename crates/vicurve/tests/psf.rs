@@ -116,3 +116,33 @@ fn correction_removes_the_blur_bias_on_discs() {
         );
     }
 }
+
+#[test]
+fn the_width_and_blur_of_a_thin_line() {
+    for (width, blur) in [(3.0, 1.0), (5.0, 1.0), (3.0, 2.0)] {
+        let spec = RenderSpec {
+            kind: Kind::Contour,
+            line_width: width,
+            blur_sigma: blur,
+            ..disc(0.0)
+        };
+        let image = render(&spec).unwrap();
+        let sampler = Sampler::new(&image, Interpolation::CubicBSpline);
+        let curve = InitialCurve::Circle {
+            cx: 120.3,
+            cy: 119.6,
+            r: 70.0,
+        }
+        .to_curve()
+        .unwrap();
+        let e = vicurve::psf::line_spread(&sampler, &curve, 8.0).unwrap();
+        let expect = (blur * blur + 1.0 / 12.0).sqrt();
+        let w = e.line_width.unwrap();
+        println!(
+            "line {width} px, blur {blur}: spread {:.3} (expected {expect:.3}), width {w:.2}",
+            e.sigma
+        );
+        assert!((e.sigma - expect).abs() <= 0.05 * expect, "{}", e.sigma);
+        assert!((w - width).abs() <= 0.1 * width, "{w}");
+    }
+}

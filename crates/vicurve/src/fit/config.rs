@@ -133,12 +133,13 @@ pub struct FitConfig {
     /// Largest spacing of the output samples along the curve, pixels.
     /// Default: 1.
     pub sample_spacing: f64,
-    /// Silhouettes: estimate the edge's blur from the image and remove the
-    /// shift `s^2 kappa / 2` it causes on curved edges (see [`crate::psf`]),
-    /// so that the result is the true boundary rather than the blurred
-    /// edge's half-level. Turn it off for images whose profile is not a
-    /// blurred step, such as the paper's synthetic disc rendered with the
-    /// virtual profile itself. Contours are not corrected. Default: true.
+    /// Estimate the blur of the edge (silhouettes) or line (contours) from
+    /// the image, end the default schedule with a band matched to it, and
+    /// remove the shift `s^2 kappa / 2` the blur causes on curved edges and
+    /// lines (see [`crate::psf`]), so that the result is the true boundary or
+    /// centre line rather than the blurred one. Turn it off for images whose
+    /// profile is not a blurred step or bar, such as the paper's synthetic
+    /// disc rendered with the virtual profile itself. Default: true.
     pub blur_correction: bool,
 }
 

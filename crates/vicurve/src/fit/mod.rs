@@ -265,19 +265,23 @@ pub fn measure_from(
         // curve; with the default schedule, when the edge is much wider than
         // the last band, measure once more with a band matched to it (the
         // paper's optimum, R_g = R_f), where the blur correction is exact.
-        if is_last && config.kind == Kind::Silhouette && config.blur_correction {
-            edge_spread = estimate_spread(sampler, &current);
+        if is_last && config.blur_correction {
+            edge_spread = estimate_spread(sampler, &current, config.kind);
             if let Some(e) = edge_spread {
-                let matched = (MATCHED_BAND * e.sigma * 2.0).round() / 2.0;
+                let matched = (matched_band(&e) * 2.0).round() / 2.0;
                 if auto
                     && !matched_added
                     && matched > BAND_MISMATCH * r
                     && e.fit_quality >= MIN_EDGE_FIT_QUALITY
                 {
                     matched_added = true;
+                    // The shape needs the elements the last stage chose.
+                    let elements = last.as_ref().map_or(stage.elements, |f| {
+                        Elements::Length(f.corr.basis.element_length())
+                    });
                     stages.push(Stage {
                         half_width: matched,
-                        elements: stage.elements,
+                        elements,
                     });
                 }
             }
@@ -299,14 +303,14 @@ pub fn measure_from(
             });
         }
     };
-    // The blur's curvature shift (silhouettes): removed when the edge looks
-    // like a blurred step and the last band is not much narrower than it
+    // The blur's curvature shift: removed when the edge (or line) looks
+    // like a blurred step (or bar) and the last band is not much narrower than it
     // (a narrow band sees only the middle of a wide edge, and stays between
     // the half-level and the boundary).
     let last_r = reports.last().map_or(0.0, |s: &StageReport| s.half_width);
     let blur = edge_spread
         .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
-        .filter(|e| MATCHED_BAND * e.sigma <= BAND_MISMATCH * last_r)
+        .filter(|e| matched_band(e) <= BAND_MISMATCH * last_r)
         .map(|e| e.sigma);
     let (curve, curve_fit_error, samples) = fin.samples(config.sample_spacing, p.max(3), blur)?;
     Ok(Measurement {
@@ -490,16 +494,25 @@ fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
         .sum()
 }
 
-/// The edge spread around `curve`, on a band wide enough for it (see
-/// [`psf::edge_spread`]): the search is bounded by a third of the band, so
-/// a result near that bound is estimated again on a band four times the
-/// spread.
-fn estimate_spread(sampler: &Sampler, curve: &SplineCurve) -> Option<psf::EdgeSpread> {
+/// The spread of the edge (silhouettes) or line (contours) around
+/// `curve` ([`psf::edge_spread`], [`psf::line_spread`]). An edge's search is
+/// bounded by a third of the band, so a result near that bound is estimated
+/// again on a band four times the spread.
+fn estimate_spread(sampler: &Sampler, curve: &SplineCurve, kind: Kind) -> Option<psf::EdgeSpread> {
+    if kind == Kind::Contour {
+        return psf::line_spread(sampler, curve, EDGE_SPREAD_BAND);
+    }
     let first = psf::edge_spread(sampler, curve, EDGE_SPREAD_BAND)?;
     if first.sigma < 0.9 * EDGE_SPREAD_BAND / 3.0 {
         return Some(first);
     }
     psf::edge_spread(sampler, curve, 4.0 * first.sigma).or(Some(first))
+}
+
+/// The band half-width that sees the whole edge or line: `2.5 s` for an
+/// edge, plus half the width for a line.
+fn matched_band(e: &psf::EdgeSpread) -> f64 {
+    MATCHED_BAND * e.sigma + 0.5 * e.line_width.unwrap_or(0.0)
 }
 
 /// Scalar secant relaxation of the Gauss–Newton steps.
