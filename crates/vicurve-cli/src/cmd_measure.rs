@@ -53,10 +53,10 @@ pub struct Args {
     /// Iteration limit per stage.
     #[arg(long, default_value_t = 200)]
     pub max_iter: usize,
-    /// Silhouettes: do not remove the shift `s^2 kappa / 2` that the
-    /// estimated blur causes on curved edges (report the blurred edge's
-    /// half-level instead of the true boundary). Use it for images that are
-    /// not blurred steps, such as `synth paper-disc`.
+    /// Do not estimate the blur, match the last band to it and remove the
+    /// shift `s^2 kappa / 2` it causes on curved edges and lines (report the
+    /// blurred curve instead of the true one). Use it for images that are
+    /// not blurred steps or lines, such as `synth paper-disc`.
     #[arg(long)]
     pub no_blur_correction: bool,
     #[command(flatten)]

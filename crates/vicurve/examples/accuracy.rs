@@ -92,6 +92,74 @@ fn cases() -> Vec<Case> {
             config: FitConfig::default(),
         });
     }
+    let blur1 = |shape: Shape, kind: Kind, fg: f64, bg: f64| RenderSpec {
+        width: 300,
+        height: 300,
+        shape,
+        kind,
+        line_width: 3.0,
+        method: Method::Coverage,
+        foreground: fg,
+        background: bg,
+        blur_sigma: 1.0,
+        bits: Some(8),
+        ..RenderSpec::default()
+    };
+    let sine = |y0: f64, amplitude: f64, wavelength: f64, phase: f64| Shape::Sine {
+        y0,
+        amplitude,
+        wavelength,
+        phase,
+        x_min: 30.0,
+        x_max: 270.0,
+    };
+    out.push(Case {
+        name: "open sine edge (A = 12, λ = 150), blur 1, from a segment, default",
+        spec: blur1(sine(150.2, 12.0, 150.0, 0.3), Kind::Silhouette, 0.8, 0.2),
+        init: InitialCurve::Segment {
+            x0: 30.0,
+            y0: 150.0,
+            x1: 270.0,
+            y1: 150.0,
+        },
+        config: FitConfig::default(),
+    });
+    out.push(Case {
+        name: "ring line r = 90, 3 px wide, blur 1, contour, default",
+        spec: blur1(
+            Shape::Circle {
+                cx: 150.3,
+                cy: 149.8,
+                r: 90.0,
+            },
+            Kind::Contour,
+            0.9,
+            0.1,
+        ),
+        init: InitialCurve::Circle {
+            cx: 152.0,
+            cy: 148.0,
+            r: 93.0,
+        },
+        config: FitConfig {
+            kind: Kind::Contour,
+            ..FitConfig::default()
+        },
+    });
+    out.push(Case {
+        name: "dark sine line (A = 10, λ = 120), 3 px wide, blur 1, contour, default",
+        spec: blur1(sine(149.6, 10.0, 120.0, 1.0), Kind::Contour, 0.15, 0.85),
+        init: InitialCurve::Segment {
+            x0: 30.0,
+            y0: 151.0,
+            x1: 270.0,
+            y1: 151.0,
+        },
+        config: FitConfig {
+            kind: Kind::Contour,
+            ..FitConfig::default()
+        },
+    });
     out.push(Case {
         name: "star 1024², blur 1, 1 % noise, from a circle 10 px off, default",
         spec: star,

@@ -10,9 +10,11 @@
 //! image does, inherits that shift: 6 to 7e-3 px for a blur of 1 px on a
 //! disc of radius 80, 0.05 px for a blur of 4 px on a disc of radius 150.
 //!
-//! [`edge_spread`] estimates `s` from the pixels around a measured curve (a
-//! least-squares fit of an error-function edge across it), and
-//! [`curvature_shift`] is the shift to remove. Images that are not blurred
+//! The centre line of a blurred curved thin line moves the same way.
+//! [`edge_spread`] and [`line_spread`] estimate `s` (and a line's width) from
+//! the pixels around a measured curve (least-squares fits of an
+//! error-function edge or bar across it), and [`curvature_shift`] is the
+//! shift to remove. Images that are not blurred
 //! steps, such as the paper's synthetic disc (its profile is a function of
 //! the distance to the circle, with no blur), must not be corrected: see
 //! [`crate::fit::FitConfig::blur_correction`].
