@@ -62,31 +62,8 @@ fn phi_cdf(x: f64) -> f64 {
 /// holds too few pixels.
 pub fn edge_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> Option<EdgeSpread> {
     let data = band_data(sampler, curve, half_width, MAX_PIXELS)?;
-    let n = data.len() as f64;
-    let mean = data.iter().map(|d| d.1).sum::<f64>() / n;
-    let total = data.iter().map(|d| (d.1 - mean).powi(2)).sum::<f64>();
-    if total.is_nan() || total <= 0.0 {
-        return None;
-    }
-    // Residual sum of squares of the best A + C Phi(-r/s) for a given s.
-    let ssr = |s: f64| -> f64 {
-        let (mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for &(r, f) in &data {
-            let g = phi_cdf(-r / s);
-            sg += g;
-            sgg += g * g;
-            sf += f;
-            sfg += f * g;
-            sff += f * f;
-        }
-        let det = n * sgg - sg * sg;
-        if det.abs() < 1e-300 {
-            return f64::INFINITY;
-        }
-        let a = (sgg * sf - sg * sfg) / det;
-        let c = (n * sfg - sg * sf) / det;
-        (sff - a * sf - c * sfg).max(0.0)
-    };
+    let total = spread_about_mean(&data)?;
+    let ssr = |s: f64| profile_ssr(&data, |r| phi_cdf(-r / s));
     // Golden-section search on log s; 30 steps shrink its interval by
     // 0.618^30 ~ 5e-7.
     let s = golden(0.05f64.ln(), (half_width / 3.0).max(0.1).ln(), 30, |x| {
@@ -136,29 +113,11 @@ fn golden(lo: f64, hi: f64, steps: usize, f: impl Fn(f64) -> f64) -> f64 {
 /// its fit quality and the caller decides.
 pub fn line_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> Option<EdgeSpread> {
     let data = band_data(sampler, curve, half_width, 1500)?;
-    let n = data.len() as f64;
-    let mean = data.iter().map(|d| d.1).sum::<f64>() / n;
-    let total = data.iter().map(|d| (d.1 - mean).powi(2)).sum::<f64>();
-    if total.is_nan() || total <= 0.0 {
-        return None;
-    }
-    let ssr = |s: f64, w: f64| -> f64 {
-        let (mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for &(r, f) in &data {
-            let g = phi_cdf((r + 0.5 * w) / s) - phi_cdf((r - 0.5 * w) / s);
-            sg += g;
-            sgg += g * g;
-            sf += f;
-            sfg += f * g;
-            sff += f * f;
-        }
-        let det = n * sgg - sg * sg;
-        if det.abs() < 1e-300 {
-            return f64::INFINITY;
-        }
-        let a = (sgg * sf - sg * sfg) / det;
-        let c = (n * sfg - sg * sf) / det;
-        (sff - a * sf - c * sfg).max(0.0)
+    let total = spread_about_mean(&data)?;
+    let ssr = |s: f64, w: f64| {
+        profile_ssr(&data, |r| {
+            phi_cdf((r + 0.5 * w) / s) - phi_cdf((r - 0.5 * w) / s)
+        })
     };
     let (s_lo, s_hi) = (0.05f64.ln(), (half_width / 3.0).max(0.1).ln());
     // Nested searches (w outside, s inside): the two trade off against
@@ -172,6 +131,36 @@ pub fn line_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
         fit_quality: 1.0 - ssr(s, w) / total,
         pixels: data.len(),
     })
+}
+
+/// Residual sum of squares of the best `A + C g(r)` through `(r, f)`
+/// (linear least squares in `A`, `C`).
+fn profile_ssr(data: &[(f64, f64)], g: impl Fn(f64) -> f64) -> f64 {
+    let n = data.len() as f64;
+    let (mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(r, f) in data {
+        let v = g(r);
+        sg += v;
+        sgg += v * v;
+        sf += f;
+        sfg += f * v;
+        sff += f * f;
+    }
+    let det = n * sgg - sg * sg;
+    if det.abs() < 1e-300 {
+        return f64::INFINITY;
+    }
+    let a = (sgg * sf - sg * sfg) / det;
+    let c = (n * sfg - sg * sf) / det;
+    (sff - a * sf - c * sfg).max(0.0)
+}
+
+/// Sum of squared deviations of the gray levels from their mean (`None`
+/// for a flat band).
+fn spread_about_mean(data: &[(f64, f64)]) -> Option<f64> {
+    let mean = data.iter().map(|d| d.1).sum::<f64>() / data.len() as f64;
+    let total: f64 = data.iter().map(|d| (d.1 - mean).powi(2)).sum();
+    (total > 0.0).then_some(total)
 }
 
 /// `(r, f)` for the pixels within `half_width` of `curve` (at most about
