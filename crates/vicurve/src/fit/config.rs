@@ -81,7 +81,10 @@ impl Stage {
 /// last one starts with, so that their noise stays within what the last
 /// stage re-measures. Stages whose band is too wide for the curve (R above
 /// half the radius of a circle of the same length) or that would leave the
-/// image are skipped, the last one excepted.
+/// image are skipped, the last one excepted. With
+/// [`FitConfig::blur_correction`] on, one more stage with a band matched to
+/// the estimated blur follows when the edge is wider than the last band
+/// (see [`crate::psf`]).
 pub fn default_stages() -> Vec<Stage> {
     let fixed = |half_width: f64, h: f64| Stage {
         half_width,
