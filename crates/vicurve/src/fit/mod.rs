@@ -143,6 +143,11 @@ pub fn measure_from(
                         if first_band {
                             return Err(e);
                         }
+                        if appended {
+                            // An optional refinement: the previous result stands.
+                            skipped.push(format!("R = {r} px (matched to the blur): {e}"));
+                            break 'stages;
+                        }
                         let (x, y) = match e {
                             Error::BandOutsideImage { x, y, .. }
                             | Error::CurveOutsideImage { x, y, .. } => (x, y),
@@ -169,6 +174,10 @@ pub fn measure_from(
             let mut corr = match Correlation::new(band, basis.clone()) {
                 Ok(c) => c,
                 Err(e) if first_band => return Err(e),
+                Err(e) if appended => {
+                    skipped.push(format!("R = {r} px (matched to the blur): {e}"));
+                    break 'stages;
+                }
                 Err(_) => {
                     outcome = Outcome::Diverged {
                         divergence: Divergence::Degenerate,
@@ -215,6 +224,10 @@ pub fn measure_from(
                     current = displaced(&current, &corr.basis, &lambda)?;
                     rereferences += 1;
                 }
+                Some(Outcome::Diverged { divergence }) if appended => {
+                    skipped.push(format!("R = {r} px (matched to the blur): {divergence}"));
+                    break 'stages;
+                }
                 Some(o @ Outcome::Diverged { .. }) => {
                     outcome = o;
                     reports.push(report(
@@ -252,6 +265,7 @@ pub fn measure_from(
                         o,
                     ));
                     last = Some(Final {
+                        half_width: r,
                         reference: std::mem::replace(&mut current, next),
                         c: step.map_or(1.0, |s| s.c),
                         corr,
@@ -307,10 +321,9 @@ pub fn measure_from(
     // like a blurred step (or bar) and the last band is not much narrower than it
     // (a narrow band sees only the middle of a wide edge, and stays between
     // the half-level and the boundary).
-    let last_r = reports.last().map_or(0.0, |s: &StageReport| s.half_width);
     let blur = edge_spread
         .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
-        .filter(|e| matched_band(e) <= BAND_MISMATCH * last_r)
+        .filter(|e| matched_band(e) <= BAND_MISMATCH * fin.half_width)
         .map(|e| e.sigma);
     let (curve, curve_fit_error, samples) = fin.samples(config.sample_spacing, p.max(3), blur)?;
     Ok(Measurement {
@@ -573,6 +586,8 @@ impl Relaxation {
 /// The last completed stage, kept to produce the output samples and their
 /// uncertainty.
 struct Final {
+    /// Band half-width of the stage, pixels.
+    half_width: f64,
     reference: SplineCurve,
     corr: Correlation,
     lambda: Vec<f64>,
