@@ -140,22 +140,8 @@ impl Band {
         };
 
         let reach = half_width + step + 1.0;
-        let bb = verts.iter().fold(
-            [
-                f64::INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::NEG_INFINITY,
-            ],
-            |b, p| {
-                [
-                    b[0].min(p[0]),
-                    b[1].min(p[1]),
-                    b[2].max(p[0]),
-                    b[3].max(p[1]),
-                ]
-            },
-        );
+        // The control polygon's box contains the curve and its polyline.
+        let bb = curve.bounding_box();
         let gx0 = ((bb[0] - reach).floor().max(0.0)) as usize;
         let gy0 = ((bb[1] - reach).floor().max(0.0)) as usize;
         let gx1 = ((bb[2] + reach).ceil().min(width as f64 - 1.0)).max(0.0) as usize;
