@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, parse_stages, FitConfig, Measurement, Outcome, Polarity};
 use vicurve::interp::Interpolation;
-use vicurve::virtual_image::Kind;
+use vicurve::virtual_image::{Kind, Profile};
 use vicurve::Image;
 
 /// Measure a curve in an image.
@@ -277,7 +277,12 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
     if let Some(a) = m.area() {
         println!("area:        {:.4} px^2", a);
     }
-    if let Some(e) = m.edge_spread {
+    let last_profile = m.stages.last().map(|s| s.profile);
+    if let Some(Profile::PixelEdge { blur }) = last_profile {
+        println!(
+            "edge blur:   {blur:.3} px optical (fitted; the last stage's virtual edge is a pixel through it, so the true boundary is measured)"
+        );
+    } else if let Some(e) = m.edge_spread {
         println!(
             "edge blur:   {:.3} px ({}; fit quality {:.3})",
             e.sigma,

@@ -11,8 +11,8 @@
 //! Everything that depends only on the reference curve is computed here,
 //! once per reference: `s`, `r`, the normal, the `p + 1` non-zero
 //! displacement basis values at `s`, the virtual image profile
-//! `gamma(r / R)` with its derivative, and the pixel's weight
-//! `1 / (1 - kappa r)`.
+//! `gamma` with its derivative, the curvature at the foot and the pixel's
+//! weight `1 / (1 - kappa r)`.
 //!
 //! # Why the weight
 //! Pixels are uniform in the plane, so in `(s, r)` their density is
@@ -32,7 +32,7 @@
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::spline::{Basis, MAX_DEGREE};
-use crate::virtual_image::Kind;
+use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
 /// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
@@ -43,7 +43,7 @@ const MIN_JACOBIAN: f64 = 0.1;
 #[derive(Clone, Debug)]
 pub struct Band {
     half_width: f64,
-    kind: Kind,
+    profile: Profile,
     degree: usize,
     pub(crate) pos: Vec<[f64; 2]>,
     pub(crate) normal: Vec<[f64; 2]>,
@@ -58,6 +58,8 @@ pub struct Band {
     pub(crate) dgamma: Vec<f64>,
     /// `1 / (1 - kappa r)`, see the module docs.
     pub(crate) weight: Vec<f64>,
+    /// Signed curvature of the curve at the pixel's closest point, 1/px.
+    pub(crate) curvature: Vec<f64>,
 }
 
 /// One band pixel with everything [`Band`] stores about it, as the parallel
@@ -72,12 +74,14 @@ struct Candidate {
     gamma: f64,
     dgamma: f64,
     weight: f64,
+    curvature: f64,
 }
 
 impl Band {
     /// The band of half-width `half_width` (pixels) around `curve`, for the
     /// displacement basis `basis` (whose parameter is the curve's) and the
-    /// profile of `kind`, in an image of `width x height` pixels.
+    /// virtual `profile` (a [`Profile`] or a [`crate::virtual_image::Kind`]
+    /// for the paper's), in an image of `width x height` pixels.
     ///
     /// Errors: [`Error::InvalidParameter`] for a half-width under 0.5 px or
     /// a basis whose length differs from the curve's;
@@ -88,11 +92,11 @@ impl Band {
         curve: &SplineCurve,
         basis: &Basis,
         half_width: f64,
-        kind: Kind,
+        profile: impl Into<Profile>,
         width: usize,
         height: usize,
     ) -> Result<Band> {
-        Band::build_with(curve, basis, half_width, kind, width, height, false)
+        Band::build_with(curve, basis, half_width, profile, width, height, false)
     }
 
     /// [`Band::build`], keeping only every other pixel in a checkerboard
@@ -106,11 +110,12 @@ impl Band {
         curve: &SplineCurve,
         basis: &Basis,
         half_width: f64,
-        kind: Kind,
+        profile: impl Into<Profile>,
         width: usize,
         height: usize,
         checkerboard: bool,
     ) -> Result<Band> {
+        let profile = profile.into();
         if !(half_width.is_finite() && half_width >= 0.5) {
             return Err(Error::invalid(
                 "band half-width",
@@ -269,7 +274,7 @@ impl Band {
                     }
                     let mut values = [0.0; MAX_DEGREE + 1];
                     let first = basis.eval(pr.u, &mut values) as u32;
-                    let rho = pr.r / half_width;
+                    let (gamma, dgamma) = profile.eval(pr.r, half_width, pr.normal, pr.curvature);
                     out.push(Candidate {
                         pos: [x, y],
                         normal: pr.normal,
@@ -277,9 +282,10 @@ impl Band {
                         r: pr.r,
                         first,
                         basis: values,
-                        gamma: kind.gamma(rho),
-                        dgamma: kind.gamma_prime(rho) / half_width,
+                        gamma,
+                        dgamma,
                         weight: if checkerboard { 2.0 } else { 1.0 } / jacobian,
+                        curvature: pr.curvature,
                     });
                 }
                 out
@@ -290,7 +296,7 @@ impl Band {
         let p = basis.degree();
         let mut band = Band {
             half_width,
-            kind,
+            profile,
             degree: p,
             pos: Vec::with_capacity(total),
             normal: Vec::with_capacity(total),
@@ -301,6 +307,7 @@ impl Band {
             gamma: Vec::with_capacity(total),
             dgamma: Vec::with_capacity(total),
             weight: Vec::with_capacity(total),
+            curvature: Vec::with_capacity(total),
         };
         for c in rows.into_iter().flatten() {
             band.pos.push(c.pos);
@@ -312,6 +319,7 @@ impl Band {
             band.gamma.push(c.gamma);
             band.dgamma.push(c.dgamma);
             band.weight.push(c.weight);
+            band.curvature.push(c.curvature);
         }
         Ok(band)
     }
@@ -331,9 +339,9 @@ impl Band {
         self.half_width
     }
 
-    /// The profile kind of the virtual image.
-    pub fn kind(&self) -> Kind {
-        self.kind
+    /// The profile of the virtual image.
+    pub fn profile(&self) -> Profile {
+        self.profile
     }
 
     /// Degree of the displacement basis.

@@ -80,7 +80,7 @@ pub fn edge_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
 
 /// Minimum of `f` over `[lo, hi]` by golden-section search (`steps`
 /// steps); `f` unimodal.
-fn golden(lo: f64, hi: f64, steps: usize, f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn golden(lo: f64, hi: f64, steps: usize, f: impl Fn(f64) -> f64) -> f64 {
     let ratio = 0.5 * (5f64.sqrt() - 1.0);
     let (mut lo, mut hi) = (lo, hi);
     let mut x1 = hi - ratio * (hi - lo);

@@ -28,6 +28,18 @@
 //!   `(sum dg)^2 / (n sum dg^2)` (0.81 for a silhouette): that fraction of a
 //!   shift of the edge is absorbed by the refitted dark level `a`.
 //!
+//! # Pulling the image or pushing the profile
+//! The method samples `f` at the displaced pixels (`pull back`, above),
+//! which interpolates the physical image. [`Correlation::new_pushed`] instead
+//! keeps `f` at the pixel centres, exactly as recorded, and moves the virtual
+//! profile: `g = a + c gamma(r - U(s))`, `r - U` being the pixel's distance
+//! to the displaced curve to first order (exact at `U = 0`, so a stage that
+//! re-references until `U` is negligible converges to the exact optimum). No
+//! interpolation means no interpolation error: with a virtual profile that
+//! matches the physical edge, a sharp edge is fitted without aliasing. The
+//! moments of `gamma` then change with `U` and are accumulated in the pass;
+//! `B`, `K` and the factor stay those of `U = 0`.
+//!
 //! No allocation happens in `iterate`: the per-thread accumulators are made
 //! once in `new`.
 
@@ -37,6 +49,7 @@ use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::{BandCholesky, SymBandMatrix};
 use crate::spline::Basis;
+use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
 /// Partial sums of one chunk of band pixels.
@@ -45,7 +58,11 @@ struct Accumulator {
     start: usize,
     end: usize,
     f_proj: Vec<f64>,
+    /// Pushed profile only: `sum gamma(r - U) dg N_i`.
+    g_proj: Vec<f64>,
     sum_f: f64,
+    sum_g: f64,
+    sum_gg: f64,
     sum_fg: f64,
     sum_ff: f64,
     outside: Option<[f64; 2]>,
@@ -90,9 +107,12 @@ pub(crate) struct Correlation {
     /// Sum of the weights (about the number of pixels).
     count: f64,
     pixels: f64,
-    sum_g: f64,
-    sum_gg: f64,
     acc: Vec<Accumulator>,
+    /// Scratch: `sum gamma dg N_i` of the current iteration.
+    h: Vec<f64>,
+    /// The pixel values at the band pixels when the profile is pushed (see
+    /// the [module docs](self)); `None` when the image is pulled back.
+    pushed: Option<Vec<f64>>,
     /// The last step, `dLambda`.
     pub delta: Vec<f64>,
     /// The last residual sum of squares.
@@ -162,7 +182,10 @@ impl Correlation {
                 start: (k * per).min(band.len()),
                 end: ((k + 1) * per).min(band.len()),
                 f_proj: vec![0.0; n],
+                g_proj: vec![0.0; n],
                 sum_f: 0.0,
+                sum_g: 0.0,
+                sum_gg: 0.0,
                 sum_fg: 0.0,
                 sum_ff: 0.0,
                 outside: None,
@@ -179,13 +202,35 @@ impl Correlation {
             chol,
             g1,
             g2,
-            sum_g,
-            sum_gg,
             acc,
+            h: vec![0.0; n],
+            pushed: None,
             delta: vec![0.0; n],
             ssr: 0.0,
             noise_var: None,
         })
+    }
+
+    /// [`Correlation::new`] for the pushed profile (module docs): the
+    /// image's values at the band pixels are read once here.
+    ///
+    /// Errors: those of `new`, and [`Error::BandOutsideImage`] when a band
+    /// pixel has no value.
+    pub fn new_pushed(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
+        let values = band
+            .pos
+            .iter()
+            .map(|&[x, y]| {
+                sampler.value(x, y).ok_or(Error::BandOutsideImage {
+                    x,
+                    y,
+                    half_width: band.half_width(),
+                })
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let mut corr = Correlation::new(band, basis)?;
+        corr.pushed = Some(values);
+        Ok(corr)
     }
 
     /// Number of unknowns of the displacement.
@@ -204,9 +249,14 @@ impl Correlation {
         let band = &self.band;
         let basis = &self.basis;
         let p = basis.degree();
+        let pushed = self.pushed.as_deref();
+        let (half_width, profile) = (band.half_width(), band.profile());
         self.acc.par_iter_mut().for_each(|acc| {
             acc.f_proj.iter_mut().for_each(|v| *v = 0.0);
+            acc.g_proj.iter_mut().for_each(|v| *v = 0.0);
             acc.sum_f = 0.0;
+            acc.sum_g = 0.0;
+            acc.sum_gg = 0.0;
             acc.sum_fg = 0.0;
             acc.sum_ff = 0.0;
             acc.outside = None;
@@ -217,20 +267,41 @@ impl Correlation {
                 for (k, v) in vals.iter().enumerate() {
                     u += lambda[basis.index(first, k)] * v;
                 }
-                let [x, y] = band.pos[i];
-                let [nx, ny] = band.normal[i];
-                let (xd, yd) = (x + u * nx, y + u * ny);
-                let Some(f) = sampler.value(xd, yd) else {
-                    acc.outside = Some([xd, yd]);
-                    return;
+                let w = band.weight[i];
+                let (f, gamma) = match pushed {
+                    Some(values) => {
+                        let (gamma, _) = profile.eval(
+                            band.r[i] - u,
+                            half_width,
+                            band.normal[i],
+                            band.curvature[i],
+                        );
+                        let wg = w * gamma;
+                        for (k, v) in vals.iter().enumerate() {
+                            acc.g_proj[basis.index(first, k)] += wg * band.dgamma[i] * v;
+                        }
+                        (values[i], gamma)
+                    }
+                    None => {
+                        let [x, y] = band.pos[i];
+                        let [nx, ny] = band.normal[i];
+                        let (xd, yd) = (x + u * nx, y + u * ny);
+                        let Some(f) = sampler.value(xd, yd) else {
+                            acc.outside = Some([xd, yd]);
+                            return;
+                        };
+                        (f, band.gamma[i])
+                    }
                 };
-                let wf = band.weight[i] * f;
+                let wf = w * f;
                 let proj = wf * band.dgamma[i];
                 for (k, v) in vals.iter().enumerate() {
                     acc.f_proj[basis.index(first, k)] += proj * v;
                 }
                 acc.sum_f += wf;
-                acc.sum_fg += wf * band.gamma[i];
+                acc.sum_g += w * gamma;
+                acc.sum_gg += w * gamma * gamma;
+                acc.sum_fg += wf * gamma;
                 acc.sum_ff += wf * f;
             }
         });
@@ -238,17 +309,31 @@ impl Correlation {
             return Err(StepFailure::LeftImage(q));
         }
         let (mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0);
+        let (mut sg, mut sgg) = (0.0, 0.0);
         let rhs = &mut self.delta;
         rhs.iter_mut().for_each(|v| *v = 0.0);
+        // Pulled back, `sum gamma dg N_i` is the constant G2.
+        let h = &mut self.h;
+        match pushed {
+            Some(_) => h.iter_mut().for_each(|v| *v = 0.0),
+            None => h.copy_from_slice(&self.g2),
+        }
         for acc in &self.acc {
             sf += acc.sum_f;
+            sg += acc.sum_g;
+            sgg += acc.sum_gg;
             sfg += acc.sum_fg;
             sff += acc.sum_ff;
             for (r, v) in rhs.iter_mut().zip(&acc.f_proj) {
                 *r += v;
             }
+            if pushed.is_some() {
+                for (r, v) in h.iter_mut().zip(&acc.g_proj) {
+                    *r += v;
+                }
+            }
         }
-        let (n, sg, sgg) = (self.count, self.sum_g, self.sum_gg);
+        let n = self.count;
         let det = n * sgg - sg * sg;
         let mut a = (sgg * sf - sg * sfg) / det;
         let mut c = (n * sfg - sg * sf) / det;
@@ -272,9 +357,9 @@ impl Correlation {
         if c.abs() <= 1e-9 || c.abs() < 1e-6 * spread {
             return Err(StepFailure::NoContrast);
         }
-        // F is in rhs; b_i = c (a G1_i + c G2_i - F_i).
-        for ((r, g1), g2) in rhs.iter_mut().zip(&self.g1).zip(&self.g2) {
-            *r = c * (a * g1 + c * g2 - *r);
+        // F is in rhs; b_i = c (a G1_i + c H_i - F_i), H_i = sum gamma dg N_i.
+        for ((r, g1), h) in rhs.iter_mut().zip(&self.g1).zip(h.iter()) {
+            *r = c * (a * g1 + c * h - *r);
         }
         self.chol.solve_in_place(rhs);
         // Woodbury: add Y K^-1 B^T z to z = M0^-1 b.
@@ -300,6 +385,42 @@ impl Correlation {
             residual_rms: (ssr / n).sqrt(),
             max_step,
         })
+    }
+
+    /// Pushed profile only (else `None`): the weighted residual sum of
+    /// squares at `lambda` of the virtual image with `profile` in place of
+    /// the band's, the gray levels refitted (linear least squares). For
+    /// choosing a profile parameter (the blur) at a fixed curve.
+    pub fn pushed_ssr(&self, lambda: &[f64], profile: Profile) -> Option<f64> {
+        let values = self.pushed.as_deref()?;
+        let band = &self.band;
+        let p = self.basis.degree();
+        let half_width = band.half_width();
+        let (mut n, mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for (i, &f) in values.iter().enumerate() {
+            let first = band.first[i] as usize;
+            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+            let u: f64 = vals
+                .iter()
+                .enumerate()
+                .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
+                .sum();
+            let (g, _) = profile.eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i]);
+            let w = band.weight[i];
+            n += w;
+            sg += w * g;
+            sgg += w * g * g;
+            sf += w * f;
+            sfg += w * f * g;
+            sff += w * f * f;
+        }
+        let det = n * sgg - sg * sg;
+        if det.is_nan() || det <= 0.0 {
+            return None;
+        }
+        let a = (sgg * sf - sg * sfg) / det;
+        let c = (n * sfg - sg * sf) / det;
+        Some((sff - a * sf - c * sfg).max(0.0))
     }
 
     /// Estimate the variance of the image noise from the residuals at
@@ -329,10 +450,23 @@ impl Correlation {
                 .enumerate()
                 .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
                 .sum();
-            let [x, y] = band.pos[i];
-            let [nx, ny] = band.normal[i];
-            let f = sampler.value(x + u * nx, y + u * ny)?;
-            res.push((band.r[i], a + c * band.gamma[i] - f));
+            let (f, gamma) = match &self.pushed {
+                Some(values) => {
+                    let (gamma, _) = band.profile().eval(
+                        band.r[i] - u,
+                        band.half_width(),
+                        band.normal[i],
+                        band.curvature[i],
+                    );
+                    (values[i], gamma)
+                }
+                None => {
+                    let [x, y] = band.pos[i];
+                    let [nx, ny] = band.normal[i];
+                    (sampler.value(x + u * nx, y + u * ny)?, band.gamma[i])
+                }
+            };
+            res.push((band.r[i], a + c * gamma - f));
         }
         if res.len() < 3 {
             return None;

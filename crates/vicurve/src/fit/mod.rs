@@ -31,7 +31,7 @@ use crate::image::Image;
 use crate::interp::Sampler;
 use crate::psf;
 use crate::spline::{Basis, MAX_DEGREE};
-use crate::virtual_image::Kind;
+use crate::virtual_image::{Kind, Profile};
 use correlation::{Correlation, StepFailure};
 use std::f64::consts::TAU;
 use std::time::Instant;
@@ -55,6 +55,31 @@ const BAND_MISMATCH: f64 = 1.5;
 const MIN_EDGE_FIT_QUALITY: f64 = 0.8;
 /// Re-references allowed within one stage before it is declared stuck.
 const MAX_REREFERENCES: usize = 100;
+/// A stage with the pushed profile re-references until its displacement is
+/// under this, pixels: `r - U` is then the distance to the displaced curve
+/// to well under 1e-4 px.
+const PUSHED_SETTLED: f64 = 0.02;
+/// Re-references of a pushed-profile stage before its result is taken as is.
+const PUSHED_REREFERENCES: usize = 4;
+/// Runs of the pixel-edge stage with an updated blur, at most.
+const MAX_BLUR_UPDATES: usize = 3;
+/// A fitted blur that differs from the one in use by more than this (pixels)
+/// is worth another run.
+const BLUR_TOLERANCE: f64 = 0.01;
+/// The pixel-edge stage's band covers the pixel's largest extent along a
+/// normal (`sqrt(2) / 2` px), this many blur deviations and
+/// `PIXEL_EDGE_PLATEAU` px of the flat levels on each side, and is at least
+/// `PIXEL_EDGE_MIN_BAND` px wide. Narrow on purpose: the flat levels fix
+/// `a` and `c`, and on a noiseless 8-bit image a flat level rounded by up to
+/// half a gray level no longer lies on the line through the transition's
+/// levels; the wider its share of the band, the more the curve follows
+/// (1.0 px of plateau and 3 blurs: -3.5e-3 px on a blur-1 disc at gray
+/// levels 0.1 and 0.85; 0.5 px and 2 blurs: within +-7e-4 px).
+const PIXEL_EDGE_REACH: f64 = 2.0;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_PLATEAU: f64 = 0.5;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
 
 /// Measure the curve in `image` starting from `init`.
 ///
@@ -99,8 +124,10 @@ pub fn measure_from(
 
     let mut next_stage = 0;
     let mut edge_spread = None;
-    // Whether a stage matched to the edge's blur was appended (once).
+    // Whether a stage matched to the edge's blur was appended (once), and
+    // the profile of that stage when it is a silhouette's pixel edge.
     let mut matched_added = false;
+    let mut pixel_edge: Option<Profile> = None;
     'stages: while next_stage < stages.len() {
         let k = next_stage;
         next_stage += 1;
@@ -122,56 +149,65 @@ pub fn measure_from(
         let mut iterations = 0;
         let mut rereferences = 0;
         let mut step = None;
+        let mut blur_updates = 0;
         loop {
+            // The pushed pixel-edge profile is only ever the appended stage's.
+            let pushed = if appended { pixel_edge } else { None };
+            let profile = pushed.unwrap_or(Profile::Paper { kind: config.kind });
             let length = current.param_length();
             let basis = Basis::new(p, stage.element_count(length, min_el), length, closed)?;
             let first_band = last.is_none() && iterations == 0;
             // Coarse stages (all but the last) use half the pixels.
-            let band =
-                match Band::build_with(&current, &basis, r, config.kind, width, height, !is_last) {
-                    Ok(b) => b,
-                    Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
-                        if appended && iterations == 0 {
-                            // The matched band does not fit: keep the result.
-                            skipped.push(format!("R = {r} px (matched to the edge's blur): {e}"));
-                            continue 'stages;
-                        }
-                        if first_band && auto && !is_last {
-                            skipped.push(format!("R = {r} px: {e}"));
-                            continue 'stages;
-                        }
-                        if first_band {
-                            return Err(e);
-                        }
-                        if appended {
-                            // An optional refinement: the previous result stands.
-                            skipped.push(format!("R = {r} px (matched to the blur): {e}"));
-                            break 'stages;
-                        }
-                        let (x, y) = match e {
-                            Error::BandOutsideImage { x, y, .. }
-                            | Error::CurveOutsideImage { x, y, .. } => (x, y),
-                            _ => (f64::NAN, f64::NAN),
-                        };
-                        outcome = Outcome::Diverged {
-                            divergence: Divergence::LeftImage { x, y },
-                        };
-                        reports.push(report(
-                            stage,
-                            &basis,
-                            0,
-                            iterations,
-                            rereferences,
-                            step,
-                            started,
-                            outcome,
-                        ));
+            let band = match Band::build_with(&current, &basis, r, profile, width, height, !is_last)
+            {
+                Ok(b) => b,
+                Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
+                    if appended && iterations == 0 {
+                        // The matched band does not fit: keep the result.
+                        skipped.push(format!("R = {r} px (matched to the edge's blur): {e}"));
+                        continue 'stages;
+                    }
+                    if first_band && auto && !is_last {
+                        skipped.push(format!("R = {r} px: {e}"));
+                        continue 'stages;
+                    }
+                    if first_band {
+                        return Err(e);
+                    }
+                    if appended {
+                        // An optional refinement: the previous result stands.
+                        skipped.push(format!("R = {r} px (matched to the blur): {e}"));
                         break 'stages;
                     }
-                    Err(e) => return Err(e),
-                };
+                    let (x, y) = match e {
+                        Error::BandOutsideImage { x, y, .. }
+                        | Error::CurveOutsideImage { x, y, .. } => (x, y),
+                        _ => (f64::NAN, f64::NAN),
+                    };
+                    outcome = Outcome::Diverged {
+                        divergence: Divergence::LeftImage { x, y },
+                    };
+                    reports.push(report(
+                        stage,
+                        profile,
+                        &basis,
+                        0,
+                        iterations,
+                        rereferences,
+                        step,
+                        started,
+                        outcome,
+                    ));
+                    break 'stages;
+                }
+                Err(e) => return Err(e),
+            };
             let band_pixels = band.len();
-            let mut corr = match Correlation::new(band, basis.clone()) {
+            let prepared = match pushed {
+                Some(_) => Correlation::new_pushed(band, basis.clone(), sampler),
+                None => Correlation::new(band, basis.clone()),
+            };
+            let mut corr = match prepared {
                 Ok(c) => c,
                 Err(e) if first_band => return Err(e),
                 Err(e) if appended => {
@@ -184,6 +220,7 @@ pub fn measure_from(
                     };
                     reports.push(report(
                         stage,
+                        profile,
                         &basis,
                         band_pixels,
                         iterations,
@@ -213,7 +250,25 @@ pub fn measure_from(
                 &mut step,
             );
             iterations += used;
+            // A pushed profile is exact only at U = 0: settle there. The
+            // pixel edge's blur is then fitted on the converged curve; a
+            // change means one more run with it.
+            let mut unsettled = pushed.is_some()
+                && matches!(end, Run::Converged)
+                && rereferences < PUSHED_REREFERENCES
+                && lambda.iter().any(|l| l.abs() > PUSHED_SETTLED);
+            if let (Some(Profile::PixelEdge { blur }), Run::Converged) = (pushed, &end) {
+                if blur_updates < MAX_BLUR_UPDATES {
+                    let fitted = fit_blur(&corr, &lambda, blur);
+                    if (fitted - blur).abs() > BLUR_TOLERANCE {
+                        pixel_edge = Some(Profile::PixelEdge { blur: fitted });
+                        blur_updates += 1;
+                        unsettled = true;
+                    }
+                }
+            }
             let stage_end = match end {
+                _ if unsettled => None,
                 Run::Rereference => None,
                 Run::Converged => Some(Outcome::Converged),
                 Run::IterationLimit => Some(Outcome::IterationLimit),
@@ -232,6 +287,7 @@ pub fn measure_from(
                     outcome = o;
                     reports.push(report(
                         stage,
+                        profile,
                         &corr.basis,
                         band_pixels,
                         iterations,
@@ -245,8 +301,16 @@ pub fn measure_from(
                 Some(o) => {
                     outcome = o;
                     if let (Elements::Auto { shortest, .. }, Some(s)) = (stage.elements, step) {
-                        let refined =
-                            refine(&current, corr, lambda, s, shortest, sampler, config, r)?;
+                        let refined = refine(
+                            &current,
+                            corr,
+                            lambda,
+                            s,
+                            shortest,
+                            sampler,
+                            config,
+                            (r, profile),
+                        )?;
                         (corr, lambda, step) = (refined.0, refined.1, Some(refined.2));
                         iterations += refined.3;
                     }
@@ -256,6 +320,7 @@ pub fn measure_from(
                     let next = displaced(&current, &corr.basis, &lambda)?;
                     reports.push(report(
                         stage,
+                        profile,
                         &corr.basis,
                         band_pixels,
                         iterations,
@@ -266,6 +331,7 @@ pub fn measure_from(
                     ));
                     last = Some(Final {
                         half_width: r,
+                        profile,
                         reference: std::mem::replace(&mut current, next),
                         c: step.map_or(1.0, |s| s.c),
                         corr,
@@ -276,26 +342,42 @@ pub fn measure_from(
             }
         }
         // After the last stage: estimate the edge's blur on the measured
-        // curve; with the default schedule, when the edge is much wider than
-        // the last band, measure once more with a band matched to it (the
-        // paper's optimum, R_g = R_f), where the blur correction is exact.
+        // curve. With the default schedule, measure once more with a profile
+        // matched to it: for a silhouette the pixel edge through that blur
+        // (exact, see `Profile::PixelEdge`); for a line much wider than the
+        // last band, a band matched to it (the paper's optimum, R_g = R_f),
+        // where the blur correction is exact.
         if is_last && config.blur_correction {
             edge_spread = estimate_spread(sampler, &current, config.kind);
-            if let Some(e) = edge_spread {
+            let chosen = last.as_ref().map(|f| f.corr.basis.element_length());
+            if let (Some(e), Some(chosen), true, false) = (edge_spread, chosen, auto, matched_added)
+            {
+                let good = e.fit_quality >= MIN_EDGE_FIT_QUALITY;
                 let matched = (matched_band(&e) * 2.0).round() / 2.0;
-                if auto
-                    && !matched_added
-                    && matched > BAND_MISMATCH * r
-                    && e.fit_quality >= MIN_EDGE_FIT_QUALITY
-                {
+                if good && config.kind == Kind::Silhouette {
+                    // Starting from the elements the last stage chose, and
+                    // refining further when that stage could (its sine
+                    // profile may have stopped on aliasing, which the pixel
+                    // edge does not have).
+                    let elements = match stage.elements {
+                        Elements::Auto { shortest, .. } => Elements::Auto {
+                            longest: chosen,
+                            shortest,
+                        },
+                        _ => Elements::Length(chosen),
+                    };
+                    let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
                     matched_added = true;
-                    // The shape needs the elements the last stage chose.
-                    let elements = last.as_ref().map_or(stage.elements, |f| {
-                        Elements::Length(f.corr.basis.element_length())
+                    pixel_edge = Some(Profile::PixelEdge { blur });
+                    stages.push(Stage {
+                        half_width: pixel_edge_band(blur),
+                        elements,
                     });
+                } else if good && matched > BAND_MISMATCH * r {
+                    matched_added = true;
                     stages.push(Stage {
                         half_width: matched,
-                        elements,
+                        elements: Elements::Length(chosen),
                     });
                 }
             }
@@ -321,7 +403,10 @@ pub fn measure_from(
     // like a blurred step (or bar) and the last band is not much narrower than it
     // (a narrow band sees only the middle of a wide edge, and stays between
     // the half-level and the boundary).
+    // A pixel-edge profile models the shift already.
+    let pixel_edge_result = matches!(fin.profile, Profile::PixelEdge { .. });
     let blur = edge_spread
+        .filter(|_| !pixel_edge_result)
         .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
         .filter(|e| matched_band(e) <= BAND_MISMATCH * fin.half_width)
         .map(|e| e.sigma);
@@ -334,7 +419,7 @@ pub fn measure_from(
         stages: reports,
         skipped,
         edge_spread,
-        blur_corrected: blur.is_some(),
+        blur_corrected: blur.is_some() || pixel_edge_result,
     })
 }
 
@@ -426,8 +511,9 @@ fn refine(
     shortest: f64,
     sampler: &Sampler,
     config: &FitConfig,
-    r: f64,
+    (r, profile): (f64, Profile),
 ) -> Result<(Correlation, Vec<f64>, correlation::Step, usize)> {
+    let pushed = matches!(profile, Profile::PixelEdge { .. });
     let closed = reference.is_closed();
     let min_el = if closed { config.degree + 1 } else { 1 };
     let length = reference.param_length();
@@ -450,13 +536,18 @@ fn refine(
             reference,
             &basis,
             r,
-            config.kind,
+            profile,
             sampler.width(),
             sampler.height(),
         ) else {
             break;
         };
-        let Ok(mut fine) = Correlation::new(band, basis) else {
+        let prepared = if pushed {
+            Correlation::new_pushed(band, basis, sampler)
+        } else {
+            Correlation::new(band, basis)
+        };
+        let Ok(mut fine) = prepared else {
             break;
         };
         let mut fine_lambda = vec![0.0; fine.n_unknowns()];
@@ -528,6 +619,35 @@ fn matched_band(e: &psf::EdgeSpread) -> f64 {
     MATCHED_BAND * e.sigma + 0.5 * e.line_width.unwrap_or(0.0)
 }
 
+/// The optical blur (pixels) of the pixel-edge profile that best fits the
+/// band of `corr` at `lambda` (least squares, gray levels refitted; golden
+/// section between 0 and `2 current + 1` px). The position hardly depends on
+/// it along a straight edge (the profile is symmetric), but a mismatched
+/// width makes the fit depend on the edge's sub-pixel phase: a focused edge
+/// fitted with a 0.12 px blur scatters 8e-4 px instead of 1.2e-4 px.
+fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
+    let ssr = |blur: f64| {
+        corr.pushed_ssr(lambda, Profile::PixelEdge { blur })
+            .unwrap_or(f64::INFINITY)
+    };
+    let hi = 2.0 * current + 1.0;
+    // 20 steps: the bracket shrinks to 1.5e-4 of its width.
+    let best = psf::golden(0.0, hi, 20, ssr);
+    // The bracket's ends are never evaluated: a focused edge's optimum is 0.
+    if ssr(0.0) <= ssr(best) {
+        0.0
+    } else {
+        best
+    }
+}
+
+/// Half-width of the band of the pixel-edge stage for an optical blur of
+/// `blur` pixels (see the constants), rounded up to a quarter pixel.
+fn pixel_edge_band(blur: f64) -> f64 {
+    let r = std::f64::consts::FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
+    (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
+}
+
 /// Scalar secant relaxation of the Gauss–Newton steps.
 ///
 /// The step replaces the gradient of the physical image by the virtual
@@ -588,6 +708,8 @@ impl Relaxation {
 struct Final {
     /// Band half-width of the stage, pixels.
     half_width: f64,
+    /// The stage's virtual profile.
+    profile: Profile,
     reference: SplineCurve,
     corr: Correlation,
     lambda: Vec<f64>,
@@ -717,6 +839,7 @@ fn plain_samples(curve: &SplineCurve, spacing: f64) -> Vec<Sample> {
 #[allow(clippy::too_many_arguments)]
 fn report(
     stage: &Stage,
+    profile: Profile,
     basis: &Basis,
     band_pixels: usize,
     iterations: usize,
@@ -727,6 +850,7 @@ fn report(
 ) -> StageReport {
     StageReport {
         half_width: stage.half_width,
+        profile,
         elements: basis.n_elements(),
         iterations,
         rereferences,

@@ -1,6 +1,7 @@
 //! What a measurement returns.
 
 use crate::curve::{SplineCurve, SplineCurveData};
+use crate::virtual_image::Profile;
 use serde::{Deserialize, Serialize};
 
 /// Why a fit stopped without converging.
@@ -78,6 +79,9 @@ impl std::fmt::Display for Outcome {
 pub struct StageReport {
     /// Band half-width `R`, pixels.
     pub half_width: f64,
+    /// The virtual image's profile (with the blur it assumed, for a pixel
+    /// edge).
+    pub profile: Profile,
     /// Number of elements of the displacement basis.
     pub elements: usize,
     /// Gauss–Newton iterations (all references of the stage).

@@ -13,6 +13,15 @@
 //!
 //! The dark level `a` and the contrast `c` are estimated by the fit; the sign
 //! of `c` is the polarity.
+//!
+//! These are the paper's profiles: smooth, with a width set by the band, not
+//! by the image. For the last stage of a silhouette the engine can instead use
+//! [`Profile::PixelEdge`], the step as an ideal pixel records it through the
+//! estimated blur ([`pixel_edge`]): the virtual image then matches the
+//! physical one, which removes the sub-pixel aliasing of a sharp edge and
+//! the curvature shift of a blurred one.
+
+pub mod pixel_edge;
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -48,6 +57,76 @@ impl Kind {
         match self {
             Kind::Silhouette => -0.25 * PI * (FRAC_PI_2 * rho).cos(),
             Kind::Contour => -0.5 * PI * (PI * rho).sin(),
+        }
+    }
+}
+
+/// The profile of the virtual image across the curve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "type")]
+pub enum Profile {
+    /// The paper's profile of [`Kind`], `gamma(r / R)` over the band
+    /// half-width `R`.
+    Paper {
+        /// Silhouette or contour.
+        kind: Kind,
+    },
+    /// A silhouette as an ideal square pixel records it through a Gaussian
+    /// blur of `blur` pixels: `gamma = 1 - P(T <= r - v kappa / 2)`
+    /// ([`pixel_edge::pixel_edge_cdf`]), where the pixel's trapezoid follows
+    /// the local normal and `v = blur^2 + 1/12` is the variance of the whole
+    /// spread. The term `v kappa / 2` is the first-order displacement of the
+    /// half-level of a blurred curved edge (`kappa` the signed curvature,
+    /// see [`crate::psf::curvature_shift`]): with it, the fitted curve is the
+    /// true boundary, not the blurred image's half-level.
+    PixelEdge {
+        /// Standard deviation of the optical blur, pixels (0: a focused
+        /// edge, only the pixel's own integration).
+        blur: f64,
+    },
+}
+
+impl From<Kind> for Profile {
+    fn from(kind: Kind) -> Profile {
+        Profile::Paper { kind }
+    }
+}
+
+impl Profile {
+    /// What the profile measures.
+    pub fn kind(self) -> Kind {
+        match self {
+            Profile::Paper { kind } => kind,
+            Profile::PixelEdge { .. } => Kind::Silhouette,
+        }
+    }
+
+    /// `(gamma, d gamma / d r)` at signed distance `r` (pixels) from the
+    /// curve, for a band of half-width `half_width` (pixels), at a point whose
+    /// closest point on the curve has unit normal `normal` and signed
+    /// curvature `curvature` (1/px).
+    #[inline]
+    pub fn eval(self, r: f64, half_width: f64, normal: [f64; 2], curvature: f64) -> (f64, f64) {
+        match self {
+            Profile::Paper { kind } => {
+                let rho = r / half_width;
+                (kind.gamma(rho), kind.gamma_prime(rho) / half_width)
+            }
+            Profile::PixelEdge { blur } => {
+                let variance = blur * blur + 1.0 / 12.0;
+                let t = r - 0.5 * variance * curvature;
+                let (cdf, pdf) = pixel_edge::pixel_edge_cdf(t, normal[0], normal[1], blur);
+                (1.0 - cdf, -pdf)
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for Profile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Profile::Paper { kind } => write!(f, "{kind}"),
+            Profile::PixelEdge { blur } => write!(f, "pixel edge (blur {blur:.3} px)"),
         }
     }
 }
