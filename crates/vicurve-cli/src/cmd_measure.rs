@@ -55,9 +55,9 @@ pub struct Args {
     /// Iteration limit per stage.
     #[arg(long, default_value_t = 200)]
     pub max_iter: usize,
-    /// Do not estimate the blur, match the last band to it and remove the
-    /// shift `s^2 kappa / 2` it causes on curved edges and lines (report the
-    /// blurred curve instead of the true one). Use it for images that are
+    /// Do not estimate the blur nor end with the pixel-edge stage (edges)
+    /// or remove the shift `s^2 kappa / 2` it causes (lines): report the
+    /// blurred curve instead of the true one. Use it for images that are
     /// not blurred steps or lines, such as `synth paper-disc`.
     #[arg(long)]
     pub no_blur_correction: bool,

@@ -1,6 +1,7 @@
 //! How the error on a sharp (exact-coverage, noiseless, 8-bit) disc depends
-//! on its sub-pixel position: the aliasing of a sharp edge under the sine
-//! profile (docs/benchmarks.md).
+//! on its sub-pixel position, default settings (docs/benchmarks.md; under
+//! the sine profile alone a sharp edge aliases with the pixel grid, the
+//! pixel-edge stage removes that).
 //!
 //! `cargo run --release -p vicurve --example coverage_positions`
 

@@ -82,9 +82,10 @@ impl Stage {
 /// stage re-measures. Stages whose band is too wide for the curve (R above
 /// half the radius of a circle of the same length) or that would leave the
 /// image are skipped, the last one excepted. With
-/// [`FitConfig::blur_correction`] on, one more stage with a band matched to
-/// the estimated blur follows when the edge is wider than the last band
-/// (see [`crate::psf`]).
+/// [`FitConfig::blur_correction`] on, one more stage follows: for a
+/// silhouette, the pixel-edge stage ([`crate::virtual_image::Profile::PixelEdge`]:
+/// the step as a pixel records it through the blur, which is fitted); for a
+/// line wider than the last band, a band matched to it (see [`crate::psf`]).
 pub fn default_stages() -> Vec<Stage> {
     let fixed = |half_width: f64, h: f64| Stage {
         half_width,
@@ -137,12 +138,16 @@ pub struct FitConfig {
     /// Default: 1.
     pub sample_spacing: f64,
     /// Estimate the blur of the edge (silhouettes) or line (contours) from
-    /// the image, end the default schedule with a band matched to it, and
-    /// remove the shift `s^2 kappa / 2` the blur causes on curved edges and
-    /// lines (see [`crate::psf`]), so that the result is the true boundary or
-    /// centre line rather than the blurred one. Turn it off for images whose
-    /// profile is not a blurred step or bar, such as the paper's synthetic
-    /// disc rendered with the virtual profile itself. Default: true.
+    /// the image and account for it, so that the result is the true boundary
+    /// or centre line rather than the blurred one: the default schedule of a
+    /// silhouette ends with the pixel-edge stage (the virtual edge is a pixel
+    /// seen through the fitted blur, curvature shift included); a line's
+    /// ends with a band matched to it when needed, and the shift `s^2 kappa /
+    /// 2` the blur causes on curved lines is removed (see [`crate::psf`]).
+    /// With explicit stages, the shift is removed when the last band is
+    /// matched to the blur. Turn it off for images whose profile is not a
+    /// blurred step or bar, such as the paper's synthetic disc rendered with
+    /// the virtual profile itself. Default: true.
     pub blur_correction: bool,
 }
 
