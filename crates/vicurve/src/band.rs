@@ -96,11 +96,13 @@ impl Band {
         width: usize,
         height: usize,
     ) -> Result<Band> {
-        Band::build_with(curve, basis, half_width, profile, width, height, false)
+        Band::build_with(curve, basis, half_width, profile, width, height, 1)
     }
 
-    /// [`Band::build`], keeping only every other pixel in a checkerboard
-    /// pattern (each with twice the weight) when `checkerboard` is true.
+    /// [`Band::build`], keeping one pixel in `thin` (each with `thin` times
+    /// the weight): 1 keeps all, 2 a checkerboard, 4 every other pixel of
+    /// every other row (any other value is taken as the nearest of these
+    /// below it).
     ///
     /// For the coarse stages of a schedule: they only need to bring the
     /// curve near the edge, and half the pixels of a wide band do that at
@@ -113,7 +115,7 @@ impl Band {
         profile: impl Into<Profile>,
         width: usize,
         height: usize,
-        checkerboard: bool,
+        thin: usize,
     ) -> Result<Band> {
         let profile = profile.into();
         if !(half_width.is_finite() && half_width >= 0.5) {
@@ -252,12 +254,23 @@ impl Band {
             sagitta = sagitta.max(step * turn / 4.0);
         }
         let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
+        let weight = match thin {
+            0 | 1 => 1.0,
+            2 | 3 => 2.0,
+            _ => 4.0,
+        };
         let rows: Vec<Vec<Candidate>> = (0..gh)
             .into_par_iter()
             .map(|j| {
                 let mut out = Vec::new();
                 for i in 0..gw {
-                    if checkerboard && (gx0 + i + gy0 + j) % 2 == 1 {
+                    let (x_odd, y_odd) = ((gx0 + i) % 2 == 1, (gy0 + j) % 2 == 1);
+                    let skip = match thin {
+                        0 | 1 => false,
+                        2 | 3 => x_odd != y_odd,
+                        _ => x_odd || y_odd,
+                    };
+                    if skip {
                         continue;
                     }
                     let cell = j * gw + i;
@@ -284,7 +297,7 @@ impl Band {
                         basis: values,
                         gamma,
                         dgamma,
-                        weight: if checkerboard { 2.0 } else { 1.0 } / jacobian,
+                        weight: weight / jacobian,
                         curvature: pr.curvature,
                     });
                 }

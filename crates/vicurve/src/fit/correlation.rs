@@ -392,31 +392,48 @@ impl Correlation {
 
     /// Pushed profile only (else `None`): the weighted residual sum of
     /// squares at `lambda` of the virtual image with `profile` in place of
-    /// the band's, the gray levels refitted (linear least squares). For
-    /// choosing a profile parameter (the blur) at a fixed curve.
-    pub fn pushed_ssr(&self, lambda: &[f64], profile: Profile) -> Option<f64> {
+    /// the band's, the gray levels refitted (linear least squares), over
+    /// every `stride`-th band pixel. For choosing a profile parameter (the
+    /// blur) at a fixed curve.
+    pub fn pushed_ssr(&self, lambda: &[f64], profile: Profile, stride: usize) -> Option<f64> {
         let values = self.pushed.as_deref()?;
         let band = &self.band;
-        let p = self.basis.degree();
+        let basis = &self.basis;
+        let p = basis.degree();
         let half_width = band.half_width();
-        let (mut n, mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        for (i, &f) in values.iter().enumerate() {
-            let first = band.first[i] as usize;
-            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-            let u: f64 = vals
-                .iter()
-                .enumerate()
-                .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
-                .sum();
-            let (g, _) = profile.eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i]);
-            let w = band.weight[i];
-            n += w;
-            sg += w * g;
-            sgg += w * g * g;
-            sf += w * f;
-            sfg += w * f * g;
-            sff += w * f * f;
-        }
+        let zero = [0.0; 6];
+        let sums = (0..values.len())
+            .into_par_iter()
+            .step_by(stride.max(1))
+            .fold(
+                || zero,
+                |mut acc, i| {
+                    let first = band.first[i] as usize;
+                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                    let mut u = 0.0;
+                    for (k, v) in vals.iter().enumerate() {
+                        u += lambda[basis.index(first, k)] * v;
+                    }
+                    let (g, _) =
+                        profile.eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i]);
+                    let (w, f) = (band.weight[i], values[i]);
+                    for (a, v) in
+                        acc.iter_mut()
+                            .zip([w, w * g, w * g * g, w * f, w * f * g, w * f * f])
+                    {
+                        *a += v;
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || zero,
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
+        let [n, sg, sgg, sf, sfg, sff] = sums;
         let det = n * sgg - sg * sg;
         if det.is_nan() || det <= 0.0 {
             return None;
