@@ -5,12 +5,15 @@
 //! a warning), 1 an error in the input or the files, 2 a usage error, 3 a
 //! fit that diverged (its outputs are still written).
 
+mod bench_paper;
+mod cmd_bench;
 mod cmd_demo;
 mod cmd_eval;
 mod cmd_measure;
 mod cmd_synth;
 mod output;
 mod overlay;
+mod plot;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -35,6 +38,8 @@ enum Command {
     /// Synthesise a star, measure it from a circle, print the accuracy and
     /// write the overlay.
     Demo(cmd_demo::Args),
+    /// Benchmark studies: `bench paper` re-runs the paper's section 7.
+    Bench(cmd_bench::Args),
 }
 
 /// How a command failed.
@@ -64,6 +69,7 @@ fn main() -> ExitCode {
         Command::Synth(a) => cmd_synth::run(a),
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
+        Command::Bench(a) => cmd_bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -407,3 +407,70 @@ fn demo_runs_and_reports_accuracy() {
         assert!(out_dir.join(f).exists(), "{f} missing");
     }
 }
+
+/// `bench paper --quick` writes every file, and its numbers are those of
+/// the study: the paper's disc at R_f = R_g is measured to well under the
+/// paper's 5.5e-3 px of mean error, a mismatched band is worse, and the
+/// figures are real images.
+#[test]
+fn bench_paper_quick_writes_its_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("paper");
+    let o = vicurve(&["bench", "paper", "--quick", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    for f in [
+        "paper.csv",
+        "coverage.csv",
+        "report.md",
+        "fig7.svg",
+        "fig7.png",
+        "fig8.svg",
+        "fig8.png",
+        "fig9.svg",
+        "fig9.png",
+        "fig10.svg",
+        "fig10.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let png = std::fs::read(out.join("fig7.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let svg = std::fs::read_to_string(out.join("fig9.svg")).unwrap();
+    assert!(svg.contains("<polyline") && svg.contains("R_f / R_g"));
+
+    let csv = std::fs::read_to_string(out.join("paper.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (bias, study, r_g, outcome) = (col("bias"), col("study"), col("r_g"), col("outcome"));
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert!(rows.len() >= 20, "{} rows", rows.len());
+    let matched: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[study] == "\"degree\"")
+        .map(|r| r[bias].parse::<f64>().unwrap().abs())
+        .collect();
+    assert!(matched.iter().all(|b| *b < 1e-3), "{matched:?}");
+    let wide: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[study] == "\"ratio\"" && r[r_g] == "20.0")
+        .map(|r| r[bias].parse::<f64>().unwrap().abs())
+        .collect();
+    assert!(
+        !wide.is_empty() && wide.iter().all(|b| *b > 2e-3),
+        "{wide:?}"
+    );
+    assert!(rows.iter().all(|r| r[outcome] == "\"converged\""));
+
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for heading in [
+        "## Figure 7",
+        "## Figure 8",
+        "## Figures 9 and 10",
+        "## Harder",
+    ] {
+        assert!(report.contains(heading), "{heading}");
+    }
+}
