@@ -11,9 +11,10 @@ use vicurve::band::Band;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, measure_from, Elements, FitConfig, Stage};
 use vicurve::interp::{Interpolation, Sampler};
-use vicurve::render::{presets, render};
+use vicurve::render::{presets, render, RenderSpec};
 use vicurve::solver::{BandCholesky, SymBandMatrix};
 use vicurve::spline::Basis;
+use vicurve::truth::Shape;
 use vicurve::virtual_image::Kind;
 use vicurve::Image;
 
@@ -140,6 +141,40 @@ fn measurements(c: &mut Criterion) {
     group.bench_function("decode 1024x1024 8-bit PNG", |bench| {
         bench.iter(|| vicurve::io::load_image(&path).unwrap())
     });
+    // The paper's real-image setting (its section 8): a 1704x2272 star,
+    // three stages from a circle of radius 500.
+    let big = render(&RenderSpec {
+        width: 1704,
+        height: 2272,
+        shape: Shape::Star {
+            cx: 852.3,
+            cy: 1136.6,
+            r0: 560.0,
+            amplitude: 0.2,
+            lobes: 5,
+            phase: 0.0,
+        },
+        ..presets::star_1024()
+    })
+    .unwrap();
+    let big_init = InitialCurve::Circle {
+        cx: 852.0,
+        cy: 1136.0,
+        r: 500.0,
+    };
+    group.bench_function(
+        "star 1704x2272, stages 20:25,10:50,5:100 from a circle of radius 500 (from the image)",
+        |bench| bench.iter(|| measure(&big, &big_init, &three).unwrap()),
+    );
+    let big_sampler = Sampler::new(&big, Interpolation::CubicBSpline);
+    let big_reference = big_init.to_curve().unwrap();
+    group.bench_function(
+        "star 1704x2272, stages 20:25,10:50,5:100 from a circle of radius 500 (sampler prepared)",
+        |bench| bench.iter(|| measure_from(&big_sampler, big_reference.clone(), &three).unwrap()),
+    );
+    group.bench_function("cubic B-spline prefilter, 1704x2272", |bench| {
+        bench.iter(|| Sampler::new(&big, Interpolation::CubicBSpline))
+    });
     group.finish();
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -164,6 +199,17 @@ fn iteration(c: &mut Criterion) {
     c.bench_function(
         "measure/one stage, one iteration (band + matrix + 1 GN step)",
         |bench| bench.iter(|| measure_from(&sampler, exact.clone(), &config).unwrap()),
+    );
+    // The same with eleven iterations: the difference over ten is the cost
+    // of one Gauss–Newton iteration (interpolation of the band, right-hand
+    // side, banded solve).
+    let eleven = FitConfig {
+        max_iterations: 11,
+        ..config.clone()
+    };
+    c.bench_function(
+        "measure/one stage, eleven iterations (band + matrix + 11 GN steps)",
+        |bench| bench.iter(|| measure_from(&sampler, exact.clone(), &eleven).unwrap()),
     );
 }
 
