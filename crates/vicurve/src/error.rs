@@ -43,6 +43,13 @@ pub enum Error {
         /// Why it is not supported.
         reason: String,
     },
+    /// No silhouette could be found for an automatic start
+    /// ([`crate::start`]).
+    #[error("no silhouette found: {reason}")]
+    NoSilhouette {
+        /// Why, and what to try.
+        reason: String,
+    },
     /// An image with no pixel.
     #[error("the image is empty ({width}x{height} pixels)")]
     EmptyImage {

@@ -19,6 +19,7 @@ pub mod psf;
 pub mod render;
 pub mod solver;
 pub mod spline;
+pub mod start;
 pub mod truth;
 pub mod virtual_image;
 

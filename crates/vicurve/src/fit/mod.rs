@@ -38,8 +38,12 @@ use std::time::Instant;
 
 /// Spacing of the samples used to rebuild a reference curve, pixels.
 const REFERENCE_SAMPLE_STEP: f64 = 0.5;
-/// Control-point spacing of reference and output curves, pixels.
+/// Control-point spacing of output curves, and the smallest of reference
+/// curves, pixels.
 const CURVE_SPACING: f64 = 2.0;
+/// Largest control-point spacing of a new reference, pixels (see
+/// `reference_spacing`).
+const MAX_REFERENCE_SPACING: f64 = 40.0;
 /// Half-width of the first band on which the edge's blur is estimated,
 /// pixels (a wider one is tried when the edge fills it).
 const EDGE_SPREAD_BAND: f64 = 8.0;
@@ -55,12 +59,11 @@ const BAND_MISMATCH: f64 = 1.5;
 const MIN_EDGE_FIT_QUALITY: f64 = 0.8;
 /// Re-references allowed within one stage before it is declared stuck.
 const MAX_REREFERENCES: usize = 100;
-/// A stage with the pushed profile re-references until its displacement is
-/// under this, pixels: `r - U` is then the distance to the displaced curve
-/// to well under 1e-4 px.
-const PUSHED_SETTLED: f64 = 0.02;
-/// Re-references of a pushed-profile stage before its result is taken as is.
-const PUSHED_REREFERENCES: usize = 4;
+/// The last stage of the default schedule re-references until its
+/// displacement is under this, pixels (see `settle` in [`measure_from`]).
+const SETTLE_TOLERANCE: f64 = 2e-3;
+/// Settling re-references of the last stage, at most.
+const MAX_SETTLES: usize = 4;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
 const BLUR_FIT_PIXELS: usize = 8192;
 /// Runs of the pixel-edge stage with an updated blur, at most.
@@ -152,12 +155,16 @@ pub fn measure_from(
         let mut rereferences = 0;
         let mut step = None;
         let mut blur_updates = 0;
+        // Once the last stage has chosen its elements, re-runs keep them.
+        let mut fixed_elements: Option<usize> = None;
+        let mut settles = 0;
         loop {
             // The pushed pixel-edge profile is only ever the appended stage's.
             let pushed = if appended { pixel_edge } else { None };
             let profile = pushed.unwrap_or(Profile::Paper { kind: config.kind });
             let length = current.param_length();
-            let basis = Basis::new(p, stage.element_count(length, min_el), length, closed)?;
+            let n_elements = fixed_elements.unwrap_or_else(|| stage.element_count(length, min_el));
+            let basis = Basis::new(p, n_elements, length, closed)?;
             let first_band = last.is_none() && iterations == 0;
             // Coarse stages (all but the last) only bring the curve near the
             // edge: half the pixels do that, a quarter in bands of 16 px or
@@ -258,25 +265,7 @@ pub fn measure_from(
                 &mut step,
             );
             iterations += used;
-            // A pushed profile is exact only at U = 0: settle there. The
-            // pixel edge's blur is then fitted on the converged curve; a
-            // change means one more run with it.
-            let mut unsettled = pushed.is_some()
-                && matches!(end, Run::Converged)
-                && rereferences < PUSHED_REREFERENCES
-                && lambda.iter().any(|l| l.abs() > PUSHED_SETTLED);
-            if let (Some(Profile::PixelEdge { blur }), Run::Converged) = (pushed, &end) {
-                if blur_updates < MAX_BLUR_UPDATES {
-                    let fitted = fit_blur(&corr, &lambda, blur);
-                    if (fitted - blur).abs() > BLUR_TOLERANCE {
-                        pixel_edge = Some(Profile::PixelEdge { blur: fitted });
-                        blur_updates += 1;
-                        unsettled = true;
-                    }
-                }
-            }
             let stage_end = match end {
-                _ if unsettled => None,
                 Run::Rereference => None,
                 Run::Converged => Some(Outcome::Converged),
                 Run::IterationLimit => Some(Outcome::IterationLimit),
@@ -284,7 +273,8 @@ pub fn measure_from(
             };
             match stage_end {
                 None => {
-                    current = displaced(&current, &corr.basis, &lambda)?;
+                    let spacing = reference_spacing(&corr.basis);
+                    current = displaced(&current, &corr.basis, &lambda, spacing)?;
                     rereferences += 1;
                 }
                 Some(Outcome::Diverged { divergence }) if appended => {
@@ -308,7 +298,10 @@ pub fn measure_from(
                 }
                 Some(o) => {
                     outcome = o;
-                    if let (Elements::Auto { shortest, .. }, Some(s)) = (stage.elements, step) {
+                    let auto_elements = matches!(stage.elements, Elements::Auto { .. });
+                    if let (Elements::Auto { shortest, .. }, Some(s), None) =
+                        (stage.elements, step, fixed_elements)
+                    {
                         let refined = refine(
                             &current,
                             corr,
@@ -322,10 +315,55 @@ pub fn measure_from(
                         (corr, lambda, step) = (refined.0, refined.1, Some(refined.2));
                         iterations += refined.3;
                     }
+                    if auto_elements {
+                        fixed_elements = Some(corr.basis.n_elements());
+                    }
+                    // The pixel edge's blur is fitted on the converged
+                    // curve; a change means one more run with it.
+                    let mut again = false;
+                    if let (Some(Profile::PixelEdge { blur }), Outcome::Converged) = (pushed, o) {
+                        if blur_updates < MAX_BLUR_UPDATES {
+                            let fitted = fit_blur(&corr, &lambda, blur);
+                            if (fitted - blur).abs() > BLUR_TOLERANCE {
+                                pixel_edge = Some(Profile::PixelEdge { blur: fitted });
+                                blur_updates += 1;
+                                again = true;
+                            }
+                        }
+                    }
+                    // Settle (default schedule, last stage): re-reference on
+                    // the measured curve, refitted with control points one
+                    // element apart, until the displacement vanishes. The
+                    // result is then a fixed point of the stage, whatever
+                    // the path that led there: two different starts give the
+                    // same curve, and detail finer than the elements that the
+                    // start (a traced boundary, a hand-drawn polyline) put in
+                    // the reference, which the displacement cannot remove,
+                    // is gone. A pushed profile is also exact only at U = 0.
+                    // At least once: a wiggle finer than the elements leaves
+                    // U near 0. A silhouette's R = 2 px stage leaves this to
+                    // the pixel-edge stage that follows it.
+                    let followed = config.kind == Kind::Silhouette
+                        && config.blur_correction
+                        && !matched_added;
+                    let settle = auto
+                        && is_last
+                        && !followed
+                        && o == Outcome::Converged
+                        && settles < MAX_SETTLES
+                        && (settles == 0 || lambda.iter().any(|l| l.abs() > SETTLE_TOLERANCE));
+                    if again || settle {
+                        let spacing = corr.basis.element_length().max(CURVE_SPACING);
+                        current = displaced(&current, &corr.basis, &lambda, spacing)?;
+                        settles += 1;
+                        rereferences += 1;
+                        continue;
+                    }
                     if let (None, Some(s)) = (corr.noise_var, step) {
                         corr.estimate_noise(&lambda, sampler, s.a, s.c);
                     }
-                    let next = displaced(&current, &corr.basis, &lambda)?;
+                    let spacing = reference_spacing(&corr.basis);
+                    let next = displaced(&current, &corr.basis, &lambda, spacing)?;
                     reports.push(report(
                         stage,
                         profile,
@@ -811,8 +849,27 @@ fn displaced_point(reference: &SplineCurve, basis: &Basis, lambda: &[f64], u: f6
     ]
 }
 
-/// The new reference curve `x0 + U n`.
-fn displaced(reference: &SplineCurve, basis: &Basis, lambda: &[f64]) -> Result<SplineCurve> {
+/// Control-point spacing of a new reference after a stage with `basis`:
+/// its element length, capped at `MAX_REFERENCE_SPACING` (and at least
+/// `CURVE_SPACING`). The measured curve holds no detail finer than the
+/// elements; what the previous reference held below that scale (the pixel
+/// staircase of a traced start, a hand-drawn polyline's corners) the
+/// displacement cannot remove, so the refit drops it. The cap keeps the
+/// shape a coarse first stage caught on a short open curve.
+fn reference_spacing(basis: &Basis) -> f64 {
+    basis
+        .element_length()
+        .clamp(CURVE_SPACING, MAX_REFERENCE_SPACING)
+}
+
+/// The new reference curve `x0 + U n`, a cubic B-spline with control points
+/// `spacing` pixels apart fitted to it.
+fn displaced(
+    reference: &SplineCurve,
+    basis: &Basis,
+    lambda: &[f64],
+    spacing: f64,
+) -> Result<SplineCurve> {
     let l = reference.param_length();
     let count = (l / REFERENCE_SAMPLE_STEP).ceil() as usize;
     let params = reference.sample_params(if reference.is_closed() {
@@ -824,7 +881,7 @@ fn displaced(reference: &SplineCurve, basis: &Basis, lambda: &[f64]) -> Result<S
         .iter()
         .map(|&u| displaced_point(reference, basis, lambda, u))
         .collect();
-    SplineCurve::fit(&pts, reference.is_closed(), 3, CURVE_SPACING)
+    SplineCurve::fit(&pts, reference.is_closed(), 3, spacing)
 }
 
 /// Samples of a curve without a fit behind them (sigma unknown: NaN).
