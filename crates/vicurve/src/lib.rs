@@ -17,6 +17,7 @@ pub mod interp;
 pub mod io;
 pub mod psf;
 pub mod render;
+pub mod report;
 pub mod solver;
 pub mod spline;
 pub mod start;
