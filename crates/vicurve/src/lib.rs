@@ -15,6 +15,7 @@ pub mod fit;
 pub mod image;
 pub mod interp;
 pub mod io;
+pub mod levelset;
 pub mod psf;
 pub mod render;
 pub mod report;
