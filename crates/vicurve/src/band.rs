@@ -28,9 +28,21 @@
 //! The closest point is found in two steps: a search over a polyline of the
 //! curve (chords about `R / 2` long) gives each pixel a starting parameter,
 //! then Newton's method on the exact curve refines it ([`SplineCurve::project`]).
+//!
+//! # Levelset coordinates
+//! With [`Coords::Levelset`] (the paper's way, method section 7) the pixels
+//! get `s` and `r` by bilinear interpolation of the nodal values of a
+//! [`LevelsetCoords`] mesh instead: no pixel is projected. The pixel's
+//! normal and curvature, which the exact backend takes at its closest point,
+//! are then the curve's at the interpolated `s`. A pixel belongs to the band
+//! when it lies in the meshed domain, `|r| < R`, `1 - kappa r > 0.1` and,
+//! for an open curve, `0 < s < L` (the exact backend's "closest point is
+//! not an end").
 
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
+use crate::fit::Coords;
+use crate::levelset::LevelsetCoords;
 use crate::spline::{Basis, MAX_DEGREE};
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
@@ -96,7 +108,16 @@ impl Band {
         width: usize,
         height: usize,
     ) -> Result<Band> {
-        Band::build_with(curve, basis, half_width, profile, width, height, 1)
+        Band::build_with(
+            curve,
+            basis,
+            half_width,
+            profile,
+            width,
+            height,
+            1,
+            Coords::Exact,
+        )
     }
 
     /// [`Band::build`], keeping one pixel in `thin` (each with `thin` times
@@ -107,6 +128,10 @@ impl Band {
     /// For the coarse stages of a schedule: they only need to bring the
     /// curve near the edge, and half the pixels of a wide band do that at
     /// half the cost. The last stage always uses every pixel.
+    ///
+    /// `coords` chooses how the pixels get their `(s, r)`: exact projection
+    /// or the paper's levelsets (see the [module docs](self)); the latter
+    /// may also fail as [`LevelsetCoords::build`] does.
     #[allow(clippy::too_many_arguments)]
     pub fn build_with(
         curve: &SplineCurve,
@@ -116,6 +141,7 @@ impl Band {
         width: usize,
         height: usize,
         thin: usize,
+        coords: Coords,
     ) -> Result<Band> {
         let profile = profile.into();
         if !(half_width.is_finite() && half_width >= 0.5) {
@@ -133,7 +159,61 @@ impl Band {
             ));
         }
         check_inside(curve, half_width, width, height)?;
+        let rows = match coords {
+            Coords::Exact => {
+                Band::exact_rows(curve, basis, half_width, profile, width, height, thin)
+            }
+            Coords::Levelset { mesh_size } => {
+                let levelsets = LevelsetCoords::build(curve, half_width, mesh_size, width, height)?;
+                Band::levelset_rows(
+                    &levelsets, curve, basis, half_width, profile, width, height, thin,
+                )
+            }
+        };
 
+        let total: usize = rows.iter().map(Vec::len).sum();
+        let p = basis.degree();
+        let mut band = Band {
+            half_width,
+            profile,
+            degree: p,
+            pos: Vec::with_capacity(total),
+            normal: Vec::with_capacity(total),
+            s: Vec::with_capacity(total),
+            r: Vec::with_capacity(total),
+            first: Vec::with_capacity(total),
+            basis: Vec::with_capacity(total * (p + 1)),
+            gamma: Vec::with_capacity(total),
+            dgamma: Vec::with_capacity(total),
+            weight: Vec::with_capacity(total),
+            curvature: Vec::with_capacity(total),
+        };
+        for c in rows.into_iter().flatten() {
+            band.pos.push(c.pos);
+            band.normal.push(c.normal);
+            band.s.push(c.s);
+            band.r.push(c.r);
+            band.first.push(c.first);
+            band.basis.extend_from_slice(&c.basis[..=p]);
+            band.gamma.push(c.gamma);
+            band.dgamma.push(c.dgamma);
+            band.weight.push(c.weight);
+            band.curvature.push(c.curvature);
+        }
+        Ok(band)
+    }
+
+    /// The band pixels by exact projection, row by row (raster order).
+    fn exact_rows(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        profile: Profile,
+        width: usize,
+        height: usize,
+        thin: usize,
+    ) -> Vec<Vec<Candidate>> {
+        let l = curve.param_length();
         // Polyline of the curve: chords short enough that the closest chord
         // leads Newton to the global closest point.
         let step = (0.5 * half_width).clamp(0.5, 4.0);
@@ -254,23 +334,13 @@ impl Band {
             sagitta = sagitta.max(step * turn / 4.0);
         }
         let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
-        let weight = match thin {
-            0 | 1 => 1.0,
-            2 | 3 => 2.0,
-            _ => 4.0,
-        };
-        let rows: Vec<Vec<Candidate>> = (0..gh)
+        let weight = thin_weight(thin);
+        (0..gh)
             .into_par_iter()
             .map(|j| {
                 let mut out = Vec::new();
                 for i in 0..gw {
-                    let (x_odd, y_odd) = ((gx0 + i) % 2 == 1, (gy0 + j) % 2 == 1);
-                    let skip = match thin {
-                        0 | 1 => false,
-                        2 | 3 => x_odd != y_odd,
-                        _ => x_odd || y_odd,
-                    };
-                    if skip {
+                    if thinned_out(thin, gx0 + i, gy0 + j) {
                         continue;
                     }
                     let cell = j * gw + i;
@@ -303,38 +373,74 @@ impl Band {
                 }
                 out
             })
-            .collect();
+            .collect()
+    }
 
-        let total: usize = rows.iter().map(Vec::len).sum();
-        let p = basis.degree();
-        let mut band = Band {
-            half_width,
-            profile,
-            degree: p,
-            pos: Vec::with_capacity(total),
-            normal: Vec::with_capacity(total),
-            s: Vec::with_capacity(total),
-            r: Vec::with_capacity(total),
-            first: Vec::with_capacity(total),
-            basis: Vec::with_capacity(total * (p + 1)),
-            gamma: Vec::with_capacity(total),
-            dgamma: Vec::with_capacity(total),
-            weight: Vec::with_capacity(total),
-            curvature: Vec::with_capacity(total),
-        };
-        for c in rows.into_iter().flatten() {
-            band.pos.push(c.pos);
-            band.normal.push(c.normal);
-            band.s.push(c.s);
-            band.r.push(c.r);
-            band.first.push(c.first);
-            band.basis.extend_from_slice(&c.basis[..=p]);
-            band.gamma.push(c.gamma);
-            band.dgamma.push(c.dgamma);
-            band.weight.push(c.weight);
-            band.curvature.push(c.curvature);
+    /// The band pixels with levelset coordinates, row by row (raster
+    /// order): the pixels of the meshed domain whose interpolated `(s, r)`
+    /// are in the band (see the module docs).
+    #[allow(clippy::too_many_arguments)]
+    fn levelset_rows(
+        levelsets: &LevelsetCoords,
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        profile: Profile,
+        width: usize,
+        height: usize,
+        thin: usize,
+    ) -> Vec<Vec<Candidate>> {
+        let l = curve.param_length();
+        let closed = curve.is_closed();
+        let weight = thin_weight(thin);
+        let b = levelsets.bounds();
+        let x0 = b[0].ceil().max(0.0) as usize;
+        let y0 = b[1].ceil().max(0.0) as usize;
+        let x1 = b[2].floor().min(width as f64 - 1.0);
+        let y1 = b[3].floor().min(height as f64 - 1.0);
+        if x1 < x0 as f64 || y1 < y0 as f64 {
+            return Vec::new();
         }
-        Ok(band)
+        let (x1, y1) = (x1 as usize, y1 as usize);
+        (y0..=y1)
+            .into_par_iter()
+            .map(|y| {
+                let mut out = Vec::new();
+                for x in x0..=x1 {
+                    if thinned_out(thin, x, y) {
+                        continue;
+                    }
+                    let (xf, yf) = (x as f64, y as f64);
+                    let Some((s, r)) = levelsets.eval(xf, yf) else {
+                        continue;
+                    };
+                    if r.abs() >= half_width || (!closed && (s <= 0.0 || s >= l)) {
+                        continue;
+                    }
+                    let f = curve.frame(s);
+                    let jacobian = 1.0 - f.curvature * r;
+                    if jacobian <= MIN_JACOBIAN {
+                        continue;
+                    }
+                    let mut values = [0.0; MAX_DEGREE + 1];
+                    let first = basis.eval(s, &mut values) as u32;
+                    let (gamma, dgamma) = profile.eval(r, half_width, f.normal, f.curvature);
+                    out.push(Candidate {
+                        pos: [xf, yf],
+                        normal: f.normal,
+                        s,
+                        r,
+                        first,
+                        basis: values,
+                        gamma,
+                        dgamma,
+                        weight: weight / jacobian,
+                        curvature: f.curvature,
+                    });
+                }
+                out
+            })
+            .collect()
     }
 
     /// Number of pixels in the band.
@@ -375,6 +481,27 @@ impl Band {
     /// Signed distance of each pixel to the reference curve, pixels.
     pub fn r(&self) -> &[f64] {
         &self.r
+    }
+}
+
+/// The weight of a kept pixel when one in `thin` is kept (see
+/// [`Band::build_with`]).
+fn thin_weight(thin: usize) -> f64 {
+    match thin {
+        0 | 1 => 1.0,
+        2 | 3 => 2.0,
+        _ => 4.0,
+    }
+}
+
+/// Whether pixel `(x, y)` is left out when one in `thin` is kept.
+#[inline]
+fn thinned_out(thin: usize, x: usize, y: usize) -> bool {
+    let (x_odd, y_odd) = (x % 2 == 1, y % 2 == 1);
+    match thin {
+        0 | 1 => false,
+        2 | 3 => x_odd != y_odd,
+        _ => x_odd || y_odd,
     }
 }
 

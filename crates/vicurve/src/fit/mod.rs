@@ -21,7 +21,7 @@ mod config;
 mod correlation;
 mod result;
 
-pub use config::{default_stages, parse_stages, Elements, FitConfig, Polarity, Stage};
+pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
 pub use result::{Divergence, Measurement, Outcome, Sample, StageReport};
 
 use crate::band::Band;
@@ -174,7 +174,17 @@ pub fn measure_from(
                 (false, false) => 2,
                 (false, true) => 4,
             };
-            let band = match Band::build_with(&current, &basis, r, profile, width, height, thin) {
+            let built = Band::build_with(
+                &current,
+                &basis,
+                r,
+                profile,
+                width,
+                height,
+                thin,
+                config.coords,
+            );
+            let band = match built {
                 Ok(b) => b,
                 Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
                     if appended && iterations == 0 {
@@ -578,13 +588,15 @@ fn refine(
             length,
             closed,
         )?;
-        let Ok(band) = Band::build(
+        let Ok(band) = Band::build_with(
             reference,
             &basis,
             r,
             profile,
             sampler.width(),
             sampler.height(),
+            1,
+            config.coords,
         ) else {
             break;
         };
