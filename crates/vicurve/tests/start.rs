@@ -36,7 +36,10 @@ fn max_gap(a: &Measurement, b: &Measurement) -> f64 {
             .iter()
             .enumerate()
             .map(|(k, q)| (k, (q[0] - p[0]).hypot(q[1] - p[1])))
-            .fold((0, f64::INFINITY), |acc, x| if x.1 < acc.1 { x } else { acc });
+            .fold(
+                (0, f64::INFINITY),
+                |acc, x| if x.1 < acc.1 { x } else { acc },
+            );
         let u0 = b.samples[k].s;
         let pr = b.curve.project(p[0], p[1], u0);
         worst = worst.max(pr.r.abs());
@@ -171,7 +174,9 @@ fn pick_and_region_of_interest_choose_the_object() {
             panic!()
         };
         let n = points.len() as f64;
-        points.iter().fold([0.0, 0.0], |a, p| [a[0] + p[0] / n, a[1] + p[1] / n])
+        points
+            .iter()
+            .fold([0.0, 0.0], |a, p| [a[0] + p[0] / n, a[1] + p[1] / n])
     };
     let big = find_silhouette(&image, &StartConfig::default()).unwrap();
     assert!((centre(&big)[0] - 80.0).abs() < 2.0);
@@ -221,7 +226,10 @@ fn errors_say_what_is_wrong() {
         pick: Some([f64::NAN, 5.0]),
         roi: None,
     };
-    assert!(matches!(find_silhouette(&disc, &nan), Err(Error::NonFinite { .. })));
+    assert!(matches!(
+        find_silhouette(&disc, &nan),
+        Err(Error::NonFinite { .. })
+    ));
     let tiny = StartConfig {
         pick: None,
         roi: Some([10.0, 10.0, 12.0, 60.0]),

@@ -57,6 +57,9 @@ fn predicted_sigma_matches_the_observed_scatter() {
         println!(
             "noise {noise}: observed {observed:.3e} px, predicted {predicted:.3e} px, ratio {ratio:.3}"
         );
-        assert!((0.75..=1.25).contains(&ratio), "noise {noise}: ratio {ratio}");
+        assert!(
+            (0.75..=1.25).contains(&ratio),
+            "noise {noise}: ratio {ratio}"
+        );
     }
 }

@@ -113,6 +113,9 @@ pub(crate) struct Correlation {
     acc: Vec<Accumulator>,
     /// Scratch: `sum gamma dg N_i` of the current iteration.
     h: Vec<f64>,
+    /// Robust weight of each band pixel (1: kept whole, 0: rejected), already
+    /// folded into the band's weights; see `robust_refit` in the fit.
+    pub robust: Vec<f64>,
     /// The pixel values at the band pixels when the profile is pushed (see
     /// the [module docs](self)); `None` when the image is pulled back.
     pushed: Option<Vec<f64>>,
@@ -194,6 +197,7 @@ impl Correlation {
                 outside: None,
             })
             .collect();
+        let band_len = band.len();
         Ok(Correlation {
             count,
             pixels: band.len() as f64,
@@ -207,6 +211,7 @@ impl Correlation {
             g2,
             acc,
             h: vec![0.0; n],
+            robust: vec![1.0; band_len],
             pushed: None,
             delta: vec![0.0; n],
             ssr: 0.0,
@@ -443,6 +448,49 @@ impl Correlation {
         Some((sff - a * sf - c * sfg).max(0.0))
     }
 
+    /// The residual `g - f` of band pixel `i` at `lambda` with gray levels
+    /// `a`, `c` (`None` when the displaced pixel leaves the image).
+    pub fn residual(
+        &self,
+        i: usize,
+        lambda: &[f64],
+        sampler: &Sampler,
+        a: f64,
+        c: f64,
+    ) -> Option<f64> {
+        let band = &self.band;
+        let p = self.basis.degree();
+        let first = band.first[i] as usize;
+        let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+        let u: f64 = vals
+            .iter()
+            .enumerate()
+            .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
+            .sum();
+        let (f, gamma) = match &self.pushed {
+            Some(values) => {
+                let (gamma, _) = band.profile().eval(
+                    band.r[i] - u,
+                    band.half_width(),
+                    band.normal[i],
+                    band.curvature[i],
+                );
+                (values[i], gamma)
+            }
+            None => {
+                let [x, y] = band.pos[i];
+                let [nx, ny] = band.normal[i];
+                (sampler.value(x + u * nx, y + u * ny)?, band.gamma[i])
+            }
+        };
+        Some(a + c * gamma - f)
+    }
+
+    /// Whether the profile is pushed (module docs).
+    pub fn is_pushed(&self) -> bool {
+        self.pushed.is_some()
+    }
+
     /// Estimate the variance of the image noise from the residuals at
     /// `lambda` (after convergence), and keep it for [`Self::position_sigma`].
     ///
@@ -461,36 +509,16 @@ impl Correlation {
         c: f64,
     ) -> Option<f64> {
         let band = &self.band;
-        let p = self.basis.degree();
         // A regular subsample bounds the cost (the sort) on wide bands; the
         // variance of the estimate is then about 2 / NOISE_PIXELS relative.
+        // Pixels the robust weights rejected (clutter) are left out.
         let stride = band.len().div_ceil(NOISE_PIXELS).max(1);
         let mut res: Vec<(f64, f64)> = Vec::with_capacity(band.len() / stride + 1);
         for i in (0..band.len()).step_by(stride) {
-            let first = band.first[i] as usize;
-            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-            let u: f64 = vals
-                .iter()
-                .enumerate()
-                .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
-                .sum();
-            let (f, gamma) = match &self.pushed {
-                Some(values) => {
-                    let (gamma, _) = band.profile().eval(
-                        band.r[i] - u,
-                        band.half_width(),
-                        band.normal[i],
-                        band.curvature[i],
-                    );
-                    (values[i], gamma)
-                }
-                None => {
-                    let [x, y] = band.pos[i];
-                    let [nx, ny] = band.normal[i];
-                    (sampler.value(x + u * nx, y + u * ny)?, band.gamma[i])
-                }
-            };
-            res.push((band.r[i], a + c * gamma - f));
+            if self.robust[i] < 0.5 {
+                continue;
+            }
+            res.push((band.r[i], self.residual(i, lambda, sampler, a, c)?));
         }
         if res.len() < 3 {
             return None;

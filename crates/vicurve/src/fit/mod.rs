@@ -328,6 +328,10 @@ pub fn measure_from(
                     if auto_elements {
                         fixed_elements = Some(corr.basis.n_elements());
                     }
+                    if o == Outcome::Converged {
+                        iterations +=
+                            robust_refit(&mut corr, &mut lambda, &mut step, sampler, config, r);
+                    }
                     // The pixel edge's blur is fitted on the converged
                     // curve; a change means one more run with it.
                     let mut again = false;
@@ -353,9 +357,8 @@ pub fn measure_from(
                     // At least once: a wiggle finer than the elements leaves
                     // U near 0. A silhouette's R = 2 px stage leaves this to
                     // the pixel-edge stage that follows it.
-                    let followed = config.kind == Kind::Silhouette
-                        && config.blur_correction
-                        && !matched_added;
+                    let followed =
+                        config.kind == Kind::Silhouette && config.blur_correction && !matched_added;
                     let settle = auto
                         && is_last
                         && !followed
@@ -647,6 +650,109 @@ fn refine(
     Ok((corr, lambda, step, iterations))
 }
 
+/// Residuals beyond this many robust deviations mark a band as cluttered
+/// (below, the fit is left as it is: a clean image is not reweighted).
+const OUTLIER: f64 = 5.0;
+/// Tukey's biweight constant, in robust deviations (95 % efficiency on
+/// Gaussian noise).
+const TUKEY: f64 = 4.685;
+/// The robust scale is at least this fraction of the contrast `|c|`.
+const MIN_ROBUST_SCALE: f64 = 0.02;
+/// Reweighting rounds at most.
+const ROBUST_ROUNDS: usize = 3;
+
+/// Robust weights: when some residuals of the converged fit are far beyond
+/// the others (a wire, a scratch or a speck crossing the band; the scale is
+/// 1.4826 times the median absolute residual, and at least
+/// `MIN_ROBUST_SCALE` of the contrast), weight each pixel by Tukey's
+/// biweight of its residual and fit again on the same reference, a few
+/// rounds (iteratively reweighted least squares). Rejected pixels no longer
+/// drag the curve; their share is reported per sample
+/// ([`Sample::weight`]). The matrix is re-assembled each round. Returns the
+/// iterations used; on any failure the fit before it stands.
+fn robust_refit(
+    corr: &mut Correlation,
+    lambda: &mut Vec<f64>,
+    step: &mut Option<correlation::Step>,
+    sampler: &Sampler,
+    config: &FitConfig,
+    r: f64,
+) -> usize {
+    let base: Vec<f64> = corr
+        .band
+        .weight
+        .iter()
+        .zip(&corr.robust)
+        .map(|(w, k)| if *k > 0.0 { w / k } else { *w })
+        .collect();
+    let mut used = 0;
+    for _ in 0..ROBUST_ROUNDS {
+        let Some(s) = *step else { break };
+        let res: Option<Vec<f64>> = (0..corr.band.len())
+            .map(|i| corr.residual(i, lambda, sampler, s.a, s.c))
+            .collect();
+        let Some(res) = res else { break };
+        let mut abs: Vec<f64> = res.iter().map(|v| v.abs()).collect();
+        let mid = abs.len() / 2;
+        let mad = 1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1;
+        // On a noiseless image most residuals are (nearly) zero: a floor at
+        // a fraction of the contrast keeps quantisation and small profile
+        // mismatch from passing for clutter.
+        let scale = mad.max(MIN_ROBUST_SCALE * s.c.abs());
+        if !(scale > 0.0) || res.iter().all(|v| v.abs() < OUTLIER * scale) {
+            break;
+        }
+        let cut = TUKEY * scale;
+        let robust: Vec<f64> = res
+            .iter()
+            .map(|v| {
+                let t = v / cut;
+                if t.abs() < 1.0 {
+                    (1.0 - t * t).powi(2)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut band = corr.band.clone();
+        for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
+            *w = b * k;
+        }
+        let prepared = if corr.is_pushed() {
+            Correlation::new_pushed(band, corr.basis.clone(), sampler)
+        } else {
+            Correlation::new(band, corr.basis.clone())
+        };
+        let Ok(mut next) = prepared else { break };
+        next.robust = robust;
+        let mut next_lambda = lambda.clone();
+        let mut next_step = None;
+        let (end, it) = iterate_to_end(
+            &mut next,
+            &mut next_lambda,
+            sampler,
+            config,
+            r,
+            config.max_iterations,
+            f64::INFINITY,
+            &mut next_step,
+        );
+        used += it;
+        let (Run::Converged, Some(_)) = (end, next_step) else {
+            break;
+        };
+        let moved = next_lambda
+            .iter()
+            .zip(lambda.iter())
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        (*corr, *lambda, *step) = (next, next_lambda, next_step);
+        if moved < config.tolerance {
+            break;
+        }
+    }
+    used
+}
+
 /// `U(u)` of a displacement basis and coefficients.
 fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
     let mut v = [0.0; MAX_DEGREE + 1];
@@ -813,6 +919,27 @@ impl Final {
             curve = SplineCurve::fit(&pts, closed, degree, CURVE_SPACING)?;
             s = chord_lengths(&pts);
         }
+        // Robust weights binned by the reference parameter, 1 px bins.
+        let nbins = l.ceil() as usize + 1;
+        let mut bins = vec![(0.0, 0.0); nbins];
+        for (i, &u) in self.corr.band.s.iter().enumerate() {
+            let b = &mut bins[(u.max(0.0) as usize).min(nbins - 1)];
+            b.0 += self.corr.robust[i];
+            b.1 += 1.0;
+        }
+        let weight_at = |u: f64| {
+            let k = (u.max(0.0) as usize).min(nbins - 1);
+            let (mut sum, mut n) = (0.0, 0.0);
+            for j in k.saturating_sub(1)..=(k + 1).min(nbins - 1) {
+                sum += bins[j].0;
+                n += bins[j].1;
+            }
+            if n > 0.0 {
+                sum / n
+            } else {
+                1.0
+            }
+        };
         let max_chord = s.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
         let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
         let mut fit_error: f64 = 0.0;
@@ -830,6 +957,7 @@ impl Final {
                     nx: f.normal[0],
                     ny: f.normal[1],
                     sigma: self.corr.position_sigma(params[i], self.c, &mut scratch),
+                    weight: weight_at(params[i]),
                 });
             }
         }
@@ -912,6 +1040,7 @@ fn plain_samples(curve: &SplineCurve, spacing: f64) -> Vec<Sample> {
                 nx: f.normal[0],
                 ny: f.normal[1],
                 sigma: f64::NAN,
+                weight: f64::NAN,
             }
         })
         .collect()

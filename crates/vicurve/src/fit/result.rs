@@ -119,6 +119,11 @@ pub struct Sample {
     /// Gauss–Newton covariance of the last stage, pixels (noise only: it
     /// does not include model bias).
     pub sigma: f64,
+    /// Mean robust weight of the last stage's band pixels within about a
+    /// pixel of this sample, in `[0, 1]`: 1 where nothing was down-weighted,
+    /// lower where clutter crossing the band was (see the fit's robust
+    /// weights); NaN without a fit.
+    pub weight: f64,
 }
 
 /// The result of [`crate::fit::measure`].

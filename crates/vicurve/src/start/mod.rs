@@ -126,8 +126,7 @@ pub fn find_silhouette(image: &Image, config: &StartConfig) -> Result<AutoStart>
         None => main_region(&regions, &labels, rect)?,
     };
     let chain = boundary::trace(&labels, w, h, chosen.label, chosen.first);
-    let to_image =
-        |&(i, j): &(usize, usize)| [(rect.x0 + i) as f64, (rect.y0 + j) as f64];
+    let to_image = |&(i, j): &(usize, usize)| [(rect.x0 + i) as f64, (rect.y0 + j) as f64];
     let (points, closed) = if chosen.touches_border {
         let run = free_run(&chain, rect);
         if run.len() < MIN_BOUNDARY {
@@ -213,8 +212,7 @@ fn main_region<'a>(
         .max_by_key(|(n, _)| *n)
         .map(|(_, r)| r)
         .ok_or_else(|| Error::NoSilhouette {
-            reason: "no region stands out from the background (thresholded at Otsu's level)"
-                .into(),
+            reason: "no region stands out from the background (thresholded at Otsu's level)".into(),
         })
 }
 

@@ -87,7 +87,10 @@ mod tests {
         let (labels, regions) = label(&m, 6, 4);
         assert_eq!(regions.len(), 3);
         let blob = &regions[labels[7] as usize];
-        assert_eq!((blob.pixels, blob.bright, blob.touches_border), (4, true, false));
+        assert_eq!(
+            (blob.pixels, blob.bright, blob.touches_border),
+            (4, true, false)
+        );
         assert_eq!(blob.first, (1, 1));
         let corner = &regions[labels[5] as usize];
         assert_eq!((corner.pixels, corner.touches_border), (1, true));

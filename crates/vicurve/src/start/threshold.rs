@@ -79,7 +79,11 @@ pub fn otsu(values: &[f64]) -> Option<f64> {
         hist[((v - lo) * scale) as usize] += 1;
     }
     let total = values.len() as f64;
-    let sum_all: f64 = hist.iter().enumerate().map(|(k, &n)| k as f64 * n as f64).sum();
+    let sum_all: f64 = hist
+        .iter()
+        .enumerate()
+        .map(|(k, &n)| k as f64 * n as f64)
+        .sum();
     let (mut w0, mut sum0) = (0.0, 0.0);
     let (mut best, mut best_k) = (-1.0, 0);
     for (k, &n) in hist.iter().enumerate().take(BINS - 1) {
