@@ -465,3 +465,45 @@ fn ellipse_with_all_degrees() {
         assert!(s.scatter <= bound, "degree {degree}: scatter {}", s.scatter);
     }
 }
+
+/// An edge crossing the whole image, started from a segment from border to
+/// border (what a user draws first): the ends are trimmed so that the band
+/// stays in the image, instead of the fit "leaving the image".
+#[test]
+fn edge_from_border_to_border() {
+    let shape = Shape::Sine {
+        y0: 256.3,
+        amplitude: 25.0,
+        wavelength: 256.0,
+        phase: 0.0,
+        x_min: 0.0,
+        x_max: 511.0,
+    };
+    let spec = RenderSpec {
+        width: 512,
+        height: 512,
+        shape: shape.clone(),
+        kind: Kind::Silhouette,
+        method: Method::Coverage,
+        foreground: 0.8,
+        background: 0.2,
+        blur_sigma: 1.0,
+        noise: 0.01,
+        seed: 1,
+        bits: Some(8),
+        ..RenderSpec::default()
+    };
+    let init = InitialCurve::Segment {
+        x0: 0.0,
+        y0: 256.0,
+        x1: 511.0,
+        y1: 256.0,
+    };
+    let (m, s) = run(&spec, init, FitConfig::default());
+    let pts = m.points();
+    let (first, last) = (pts[0][0].min(pts[pts.len() - 1][0]), pts[0][0].max(pts[pts.len() - 1][0]));
+    println!("border to border: {s:?}, x from {first:.1} to {last:.1}");
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert!(first < 25.0 && last > 486.0, "x from {first} to {last}");
+    assert!(s.max_abs < 0.05 && s.bias.abs() < 5e-3, "{s:?}");
+}

@@ -52,6 +52,10 @@ use crate::spline::Basis;
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
+/// Band pixels displaced out of the image that an iteration tolerates (or
+/// 2 % of the band if more): they are taken as fitting exactly.
+const MAX_OUTSIDE: usize = 8;
+
 /// Band pixels used by [`Correlation::estimate_noise`] at most.
 const NOISE_PIXELS: usize = 8192;
 
@@ -69,6 +73,7 @@ struct Accumulator {
     sum_fg: f64,
     sum_ff: f64,
     outside: Option<[f64; 2]>,
+    outside_count: usize,
 }
 
 /// Why an iteration could not produce a step.
@@ -113,6 +118,8 @@ pub(crate) struct Correlation {
     acc: Vec<Accumulator>,
     /// Scratch: `sum gamma dg N_i` of the current iteration.
     h: Vec<f64>,
+    /// The gray levels `(a, c)` of the last iteration.
+    levels: Option<(f64, f64)>,
     /// Robust weight of each band pixel (1: kept whole, 0: rejected), already
     /// folded into the band's weights; see `robust_refit` in the fit.
     pub robust: Vec<f64>,
@@ -195,6 +202,7 @@ impl Correlation {
                 sum_fg: 0.0,
                 sum_ff: 0.0,
                 outside: None,
+                outside_count: 0,
             })
             .collect();
         let band_len = band.len();
@@ -212,6 +220,7 @@ impl Correlation {
             acc,
             h: vec![0.0; n],
             robust: vec![1.0; band_len],
+            levels: None,
             pushed: None,
             delta: vec![0.0; n],
             ssr: 0.0,
@@ -258,6 +267,7 @@ impl Correlation {
         let basis = &self.basis;
         let p = basis.degree();
         let pushed = self.pushed.as_deref();
+        let levels = self.levels;
         let (half_width, profile) = (band.half_width(), band.profile());
         self.acc.par_iter_mut().for_each(|acc| {
             acc.f_proj.iter_mut().for_each(|v| *v = 0.0);
@@ -268,6 +278,7 @@ impl Correlation {
             acc.sum_fg = 0.0;
             acc.sum_ff = 0.0;
             acc.outside = None;
+            acc.outside_count = 0;
             for i in acc.start..acc.end {
                 let first = band.first[i] as usize;
                 let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
@@ -294,9 +305,21 @@ impl Correlation {
                         let [x, y] = band.pos[i];
                         let [nx, ny] = band.normal[i];
                         let (xd, yd) = (x + u * nx, y + u * ny);
-                        let Some(f) = sampler.value(xd, yd) else {
-                            acc.outside = Some([xd, yd]);
-                            return;
+                        let f = match (sampler.value(xd, yd), levels) {
+                            (Some(f), _) => f,
+                            // Displaced out of the image (an open curve's
+                            // end at the border): taken as fitting exactly,
+                            // as long as few pixels are.
+                            (None, Some((a, c))) => {
+                                acc.outside.get_or_insert([xd, yd]);
+                                acc.outside_count += 1;
+                                a + c * band.gamma[i]
+                            }
+                            (None, None) => {
+                                acc.outside = Some([xd, yd]);
+                                acc.outside_count = usize::MAX / 1024;
+                                return;
+                            }
                         };
                         (f, band.gamma[i])
                     }
@@ -313,7 +336,9 @@ impl Correlation {
                 acc.sum_ff += wf * f;
             }
         });
-        if let Some(q) = self.acc.iter().find_map(|a| a.outside) {
+        let outside: usize = self.acc.iter().map(|a| a.outside_count).sum();
+        if outside > MAX_OUTSIDE.max(band.len() / 50) {
+            let q = self.acc.iter().find_map(|a| a.outside).unwrap_or([f64::NAN; 2]);
             return Err(StepFailure::LeftImage(q));
         }
         let (mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0);
@@ -387,6 +412,7 @@ impl Correlation {
         let ssr = (n * a * a + c * c * sgg + sff + 2.0 * a * c * sg - 2.0 * a * sf - 2.0 * c * sfg)
             .max(0.0);
         self.ssr = ssr;
+        self.levels = Some((a, c));
         Ok(Step {
             a,
             c,
@@ -518,7 +544,9 @@ impl Correlation {
             if self.robust[i] < 0.5 {
                 continue;
             }
-            res.push((band.r[i], self.residual(i, lambda, sampler, a, c)?));
+            if let Some(v) = self.residual(i, lambda, sampler, a, c) {
+                res.push((band.r[i], v));
+            }
         }
         if res.len() < 3 {
             return None;

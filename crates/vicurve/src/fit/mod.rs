@@ -157,6 +157,12 @@ pub fn measure_from(
         let mut blur_updates = 0;
         // Once the last stage has chosen its elements, re-runs keep them.
         let mut fixed_elements: Option<usize> = None;
+        // An open curve's new references keep their band inside the image.
+        let clip = Clip {
+            half_width: r,
+            width,
+            height,
+        };
         let mut settles = 0;
         loop {
             // The pushed pixel-edge profile is only ever the appended stage's.
@@ -284,7 +290,7 @@ pub fn measure_from(
             match stage_end {
                 None => {
                     let spacing = reference_spacing(&corr.basis);
-                    current = displaced(&current, &corr.basis, &lambda, spacing)?;
+                    current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
                     rereferences += 1;
                 }
                 Some(Outcome::Diverged { divergence }) if appended => {
@@ -367,7 +373,7 @@ pub fn measure_from(
                         && (settles == 0 || lambda.iter().any(|l| l.abs() > SETTLE_TOLERANCE));
                     if again || settle {
                         let spacing = corr.basis.element_length().max(CURVE_SPACING);
-                        current = displaced(&current, &corr.basis, &lambda, spacing)?;
+                        current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
                         settles += 1;
                         rereferences += 1;
                         continue;
@@ -376,7 +382,7 @@ pub fn measure_from(
                         corr.estimate_noise(&lambda, sampler, s.a, s.c);
                     }
                     let spacing = reference_spacing(&corr.basis);
-                    let next = displaced(&current, &corr.basis, &lambda, spacing)?;
+                    let next = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
                     reports.push(report(
                         stage,
                         profile,
@@ -688,10 +694,10 @@ fn robust_refit(
     let mut used = 0;
     for _ in 0..ROBUST_ROUNDS {
         let Some(s) = *step else { break };
-        let res: Option<Vec<f64>> = (0..corr.band.len())
-            .map(|i| corr.residual(i, lambda, sampler, s.a, s.c))
+        // A pixel displaced out of the image counts as fitting exactly.
+        let res: Vec<f64> = (0..corr.band.len())
+            .map(|i| corr.residual(i, lambda, sampler, s.a, s.c).unwrap_or(0.0))
             .collect();
-        let Some(res) = res else { break };
         let mut abs: Vec<f64> = res.iter().map(|v| v.abs()).collect();
         let mid = abs.len() / 2;
         let mad = 1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1;
@@ -1002,26 +1008,78 @@ fn reference_spacing(basis: &Basis) -> f64 {
         .clamp(CURVE_SPACING, MAX_REFERENCE_SPACING)
 }
 
+/// Where an open curve's new reference must stay: its band, of this
+/// half-width, inside an image of this size.
+#[derive(Clone, Copy, Debug)]
+struct Clip {
+    half_width: f64,
+    width: usize,
+    height: usize,
+}
+
 /// The new reference curve `x0 + U n`, a cubic B-spline with control points
 /// `spacing` pixels apart fitted to it.
+///
+/// An open curve whose ends reach the image border (an edge that crosses
+/// the image) is trimmed to the longest stretch whose band (`clip`) stays
+/// inside the image: near a border the displacement tilts the end's normal
+/// and would push the end, or its band, out of the image, which is not a
+/// divergence. A stretch under half the curve is not taken (the curve has
+/// left the image; the band check reports it).
 fn displaced(
     reference: &SplineCurve,
     basis: &Basis,
     lambda: &[f64],
     spacing: f64,
+    clip: Clip,
 ) -> Result<SplineCurve> {
     let l = reference.param_length();
     let count = (l / REFERENCE_SAMPLE_STEP).ceil() as usize;
-    let params = reference.sample_params(if reference.is_closed() {
-        count
-    } else {
-        count + 1
-    });
+    let closed = reference.is_closed();
+    let params = reference.sample_params(if closed { count } else { count + 1 });
     let pts: Vec<[f64; 2]> = params
         .iter()
         .map(|&u| displaced_point(reference, basis, lambda, u))
         .collect();
-    SplineCurve::fit(&pts, reference.is_closed(), 3, spacing)
+    let curve = SplineCurve::fit(&pts, closed, 3, spacing)?;
+    if closed {
+        return Ok(curve);
+    }
+    // A pixel of margin: the fitted spline may overshoot its points.
+    let (w, h) = (clip.width as f64 - 2.0, clip.height as f64 - 2.0);
+    let inside = |q: [f64; 2]| q[0] >= 1.0 && q[1] >= 1.0 && q[0] <= w && q[1] <= h;
+    let s = chord_lengths(&pts);
+    let rr = clip.half_width;
+    let ok: Vec<bool> = s
+        .iter()
+        .map(|&u| {
+            let f = curve.frame(u.min(curve.param_length()));
+            let (q, n) = (f.point, f.normal);
+            inside(q)
+                && inside([q[0] + rr * n[0], q[1] + rr * n[1]])
+                && inside([q[0] - rr * n[0], q[1] - rr * n[1]])
+        })
+        .collect();
+    if ok.iter().all(|k| *k) {
+        return Ok(curve);
+    }
+    let (mut best, mut start) = ((0, 0), None);
+    for (i, &k) in ok.iter().chain(std::iter::once(&false)).enumerate() {
+        match (k, start) {
+            (true, None) => start = Some(i),
+            (false, Some(a)) => {
+                if i - a > best.1 - best.0 {
+                    best = (a, i);
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if 2 * (best.1 - best.0) < pts.len() {
+        return Ok(curve);
+    }
+    SplineCurve::fit(&pts[best.0..best.1], closed, 3, spacing)
 }
 
 /// Samples of a curve without a fit behind them (sigma unknown: NaN).
