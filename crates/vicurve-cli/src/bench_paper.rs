@@ -18,7 +18,7 @@
 use serde::Serialize;
 use std::time::Instant;
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, Elements, FitConfig, Measurement, Stage};
+use vicurve::fit::{measure, Coords, Elements, FitConfig, Measurement, Stage};
 use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::truth::{evaluate, Shape};
 use vicurve::virtual_image::{Kind, Profile};
@@ -49,6 +49,9 @@ pub struct PaperCase {
     /// Requested element length, px (the count is the nearest integer to
     /// the curve's length over it).
     pub element_size: f64,
+    /// How the band's `(s, r)` are computed: exact projection, or the
+    /// paper's levelsets on a 10 px mesh (figure 7 is run with both).
+    pub coords: Coords,
 }
 
 /// What a case gave.
@@ -90,15 +93,18 @@ pub fn paper_cases(quick: bool) -> Vec<PaperCase> {
     let sizes = element_sizes(quick);
     let mut out = Vec::new();
     let degrees: &[usize] = if quick { &[1, 3] } else { &[1, 2, 3, 4, 5] };
-    for &degree in degrees {
-        for &h in &sizes {
-            out.push(PaperCase {
-                study: Study::Degree,
-                degree,
-                r_f: 10.0,
-                r_g: 10.0,
-                element_size: h,
-            });
+    for coords in [Coords::Exact, LEVELSET] {
+        for &degree in degrees {
+            for &h in &sizes {
+                out.push(PaperCase {
+                    study: Study::Degree,
+                    degree,
+                    r_f: 10.0,
+                    r_g: 10.0,
+                    element_size: h,
+                    coords,
+                });
+            }
         }
     }
     let widths: &[f64] = if quick {
@@ -114,6 +120,7 @@ pub fn paper_cases(quick: bool) -> Vec<PaperCase> {
                 r_f: r,
                 r_g: r,
                 element_size: h,
+                coords: Coords::Exact,
             });
         }
     }
@@ -125,11 +132,16 @@ pub fn paper_cases(quick: bool) -> Vec<PaperCase> {
                 r_f: 10.0,
                 r_g: 10.0 / ratio,
                 element_size: h,
+                coords: Coords::Exact,
             });
         }
     }
     out
 }
+
+/// The paper's levelset coordinates as figure 7 runs them: a 10 px mesh,
+/// the paper's size.
+pub const LEVELSET: Coords = Coords::Levelset { mesh_size: 10.0 };
 
 /// The ratios `R_f / R_g` of figures 9 and 10.
 pub fn ratios(quick: bool) -> &'static [f64] {
@@ -171,6 +183,7 @@ pub fn run_paper(cases: &[PaperCase], mut done: impl FnMut()) -> Result<Vec<Pape
                 elements: Elements::Length(case.element_size),
             }]),
             blur_correction: false,
+            coords: case.coords,
             ..FitConfig::default()
         };
         let started = Instant::now();

@@ -424,6 +424,8 @@ fn bench_paper_quick_writes_its_report() {
         "report.md",
         "fig7.svg",
         "fig7.png",
+        "fig7-levelset.svg",
+        "fig7-levelset.png",
         "fig8.svg",
         "fig8.png",
         "fig9.svg",
