@@ -51,7 +51,17 @@ pub struct PaperCase {
     pub element_size: f64,
     /// How the band's `(s, r)` are computed: exact projection, or the
     /// paper's levelsets on a 10 px mesh (figure 7 is run with both).
+    /// In the CSV: `exact` or `levelset-<mesh>px`.
+    #[serde(serialize_with = "coords_name")]
     pub coords: Coords,
+}
+
+/// `exact` or `levelset-<mesh>px`: one CSV cell.
+fn coords_name<S: serde::Serializer>(c: &Coords, s: S) -> Result<S::Ok, S::Error> {
+    match c {
+        Coords::Exact => s.serialize_str("exact"),
+        Coords::Levelset { mesh_size } => s.serialize_str(&format!("levelset-{mesh_size}px")),
+    }
 }
 
 /// What a case gave.

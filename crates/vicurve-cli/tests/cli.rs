@@ -445,16 +445,24 @@ fn bench_paper_quick_writes_its_report() {
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let (bias, study, r_g, outcome) = (col("bias"), col("study"), col("r_g"), col("outcome"));
+    let coords = col("coords");
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
     assert!(rows.len() >= 20, "{} rows", rows.len());
     let matched: Vec<f64> = rows
         .iter()
-        .filter(|r| r[study] == "\"degree\"")
+        .filter(|r| r[study] == "\"degree\"" && r[coords] == "\"exact\"")
         .map(|r| r[bias].parse::<f64>().unwrap().abs())
         .collect();
     assert!(matched.iter().all(|b| *b < 1e-3), "{matched:?}");
+    // The paper's levelsets (10 px mesh) overestimate the convex distance.
+    let level: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[coords] == "\"levelset-10px\"")
+        .map(|r| r[bias].parse::<f64>().unwrap())
+        .collect();
+    assert!(!level.is_empty() && level.iter().all(|b| *b > 1e-2 && *b < 0.1), "{level:?}");
     let wide: Vec<f64> = rows
         .iter()
         .filter(|r| r[study] == "\"ratio\"" && r[r_g] == "20.0")
