@@ -1,0 +1,80 @@
+"""Sub-pixel measurement of curves and edges in images.
+
+vicurve measures a *contour* (a thin line: a fibre, a wire, a crack front) or
+a *silhouette* (an edge: a part against a backlight) in a grayscale image by
+Virtual Image Correlation with B-splines (Réthoré & François, 2013). The
+engine is the Rust library of the same name; this package calls it with the
+GIL released.
+
+Coordinates are pixels: ``x`` is the column, ``y`` the row, and the centre of
+the pixel in row ``i``, column ``j`` is at ``(x, y) = (j, i)``, so
+``image[i, j]`` is the gray level at ``(j, i)``. Closed curves run
+counterclockwise on screen with the normal pointing outward; open curves keep
+the direction of their start, the normal on the screen-right of travel.
+
+Functions
+---------
+measure(image, init, ...) -> Result
+    Measure a curve from a starting curve (``Circle``, ``Segment``,
+    ``Polyline``) or an automatic start (``Auto``, or ``init=None``).
+synth(shape, ...) -> (image, truth)
+    Render a test image of exactly known geometry (as ``vicurve synth``).
+eval(points, truth) -> dict
+    Bias, scatter and largest error of points against the exact curve.
+basis_values(degree, n_elements, length, closed, s) -> ndarray
+    The engine's uniform B-spline basis, for checks and plots.
+interpolate(image, xs, ys, kind="cubic") -> ndarray
+    The engine's image interpolation (cubic B-spline, bilinear, Keys).
+
+Images are 2-D NumPy arrays (``uint8`` divided by 255, ``uint16`` by 65535,
+``float32``/``float64`` taken as they are, exactly as image files are read)
+or paths to PNG, TIFF or JPEG files.
+
+Errors: ``FileNotFoundError`` for a missing file, ``ValueError`` for bad
+parameters, images or curves, ``FitError`` (a ``RuntimeError``) for a fit
+that diverged, with the partial result in its ``result`` attribute; a fit
+that reached its iteration limit returns with a ``RuntimeWarning``.
+
+Not available: tracking a curve through a sequence of images. The engine has
+no tracking yet, so there is no ``vicurve.track``; to follow a curve, measure
+each image starting from the previous result (``Polyline(result.points,
+closed=...)``).
+
+Example::
+
+    import vicurve
+    image, truth = vicurve.synth("disc", size=(400, 400), radius=150)
+    result = vicurve.measure(image, vicurve.Circle(200, 200, 140))
+    print(result.outcome, result.length, result.area)
+    print(vicurve.eval(result.points, truth))
+"""
+
+from ._vicurve import (
+    Auto,
+    Circle,
+    FitError,
+    Polyline,
+    Result,
+    Segment,
+    __version__,
+    basis_values,
+    eval,
+    interpolate,
+    measure,
+    synth,
+)
+
+__all__ = [
+    "Auto",
+    "Circle",
+    "FitError",
+    "Polyline",
+    "Result",
+    "Segment",
+    "__version__",
+    "basis_values",
+    "eval",
+    "interpolate",
+    "measure",
+    "synth",
+]

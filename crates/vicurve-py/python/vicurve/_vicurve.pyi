@@ -1,0 +1,217 @@
+"""Type stubs of the native module ``vicurve._vicurve`` (see ``vicurve``)."""
+
+import os
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ImageLike = Union[npt.NDArray[Any], str, "os.PathLike[str]"]
+"""A 2-D array (uint8, uint16, float32, float64) or the path of an image file."""
+
+ArrayLike2 = Union[npt.ArrayLike, Sequence[Sequence[float]]]
+
+Kind = Literal["silhouette", "contour"]
+PolarityName = Literal[
+    "auto",
+    "positive",
+    "negative",
+    "bright-inside",
+    "dark-inside",
+    "bright-left",
+    "bright-right",
+    "bright-line",
+    "dark-line",
+]
+InterpolationName = Literal["cubic", "bilinear", "keys", "cubic_b_spline"]
+StageElements = Union[int, str]
+"""A number of elements, an element length such as ``"40px"``, or ``"auto"``."""
+Stages = Union[Sequence[Tuple[float, StageElements]], str]
+"""``[(R, elements), ...]`` or the command line's text ``"20:25,10:50"``."""
+ShapeName = Literal[
+    "disc", "ellipse", "star", "sine-edge", "ring", "sine-line", "paper-disc"
+]
+
+class FitError(RuntimeError):
+    """The fit diverged; ``result`` holds the partial result."""
+
+    result: "Result"
+
+class Circle:
+    """A circle of centre (cx, cy) and radius r, pixels: a closed start."""
+
+    cx: float
+    cy: float
+    r: float
+    def __init__(self, cx: float, cy: float, r: float) -> None: ...
+
+class Segment:
+    """The segment from (x0, y0) to (x1, y1), pixels: an open start."""
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    def __init__(self, x0: float, y0: float, x1: float, y1: float) -> None: ...
+
+class Polyline:
+    """A polyline through N points (N x 2, x and y in pixels), open or closed."""
+
+    closed: bool
+    def __init__(self, points: ArrayLike2, closed: bool = False) -> None: ...
+    @property
+    def points(self) -> npt.NDArray[np.float64]:
+        """The vertices, N x 2 float64."""
+
+class Auto:
+    """The automatic start: Otsu threshold, main (or picked) region, its boundary."""
+
+    pick: Optional[Tuple[float, float]]
+    roi: Optional[Tuple[float, float, float, float]]
+    def __init__(
+        self,
+        pick: Optional[Tuple[float, float]] = None,
+        roi: Optional[Tuple[float, float, float, float]] = None,
+    ) -> None: ...
+
+InitialCurve = Union[Circle, Segment, Polyline, Auto, str, None]
+
+class Result:
+    """The result of ``measure``."""
+
+    @property
+    def points(self) -> npt.NDArray[np.float64]:
+        """Samples (x, y), N x 2, at most 1 px apart."""
+    @property
+    def normals(self) -> npt.NDArray[np.float64]:
+        """Unit normals (nx, ny) at the samples, N x 2."""
+    @property
+    def s(self) -> npt.NDArray[np.float64]:
+        """Arc length of each sample from the curve's start, pixels (N)."""
+    @property
+    def sigma(self) -> npt.NDArray[np.float64]:
+        """Noise standard deviation of each sample along the normal, pixels (N)."""
+    @property
+    def spline(self) -> Dict[str, Any]:
+        """degree, closed, knots (array), control_points (K x 2 array), fit_error."""
+    @property
+    def history(self) -> List[Dict[str, Any]]:
+        """One dict per stage, the fields of the result file's ``stages``."""
+    @property
+    def outcome(self) -> Literal["converged", "iteration_limit", "diverged"]: ...
+    @property
+    def divergence(
+        self,
+    ) -> Optional[Literal["left_image", "no_contrast", "non_finite", "degenerate"]]: ...
+    @property
+    def message(self) -> str:
+        """The outcome in words."""
+    @property
+    def length(self) -> float:
+        """Arc length of the measured curve, pixels."""
+    @property
+    def area(self) -> Optional[float]:
+        """Enclosed area (closed curves), square pixels; None for open curves."""
+    @property
+    def edge_spread(self) -> Optional[Dict[str, Any]]:
+        """sigma, line_width, fit_quality, pixels of the estimated blur, or None."""
+    @property
+    def blur_corrected(self) -> bool: ...
+    @property
+    def polarity(self) -> str:
+        """Which side is bright, in words."""
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def skipped(self) -> List[str]: ...
+    @property
+    def initial_curve(self) -> Union[Circle, Segment, Polyline]: ...
+    @property
+    def auto_start(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def config(self) -> Dict[str, Any]: ...
+    def to_json(self) -> str:
+        """The JSON document ``vicurve measure --out`` writes for the same input."""
+
+def measure(
+    image: ImageLike,
+    init: InitialCurve = None,
+    *,
+    kind: Kind = "silhouette",
+    stages: Optional[Stages] = None,
+    degree: int = 3,
+    polarity: PolarityName = "auto",
+    interpolation: InterpolationName = "cubic",
+    tolerance: float = 1e-4,
+    max_iterations: int = 200,
+    blur_correction: bool = True,
+) -> Result:
+    """Measure the curve in ``image`` starting from ``init``.
+
+    ``init=None`` (or ``Auto(...)``) finds the main silhouette automatically.
+    ``stages=None`` is the default schedule (20, 10, 5 and 2 px bands, the
+    last choosing its elements, then a stage matched to the edge's blur).
+    Raises ``FitError`` when the fit diverges, ``ValueError`` for bad
+    arguments, ``FileNotFoundError`` for a missing file.
+    """
+
+def synth(
+    shape: ShapeName,
+    *,
+    size: Tuple[int, int] = (512, 512),
+    center: Optional[Tuple[float, float]] = None,
+    radius: Optional[float] = None,
+    axes: Optional[Tuple[float, float]] = None,
+    angle: float = 20.0,
+    amplitude: Optional[float] = None,
+    lobes: int = 5,
+    phase: float = 0.0,
+    wavelength: Optional[float] = None,
+    y0: Optional[float] = None,
+    line: Optional[float] = None,
+    profile: Optional[float] = None,
+    blur: float = 0.0,
+    noise: float = 0.0,
+    seed: int = 1,
+    bits: Optional[int] = 8,
+    levels: Optional[Tuple[float, float]] = None,
+) -> Tuple[npt.NDArray[Any], Dict[str, Any]]:
+    """Render a test image of exactly known geometry, as ``vicurve synth``.
+
+    Returns ``(image, truth)``: a (height, width) array, uint8 for
+    ``bits=8``, uint16 for ``bits=16``, float64 for ``bits=None``; and the
+    truth file's content as a dict.
+    """
+
+def eval(points: ArrayLike2, truth: Union[Dict[str, Any], str, "os.PathLike[str]"]) -> Dict[str, Any]:
+    """points (count), bias, scatter, rms, max_abs (pixels) and distances (array)."""
+
+def basis_values(
+    degree: int,
+    n_elements: int,
+    length: float,
+    closed: bool,
+    s: npt.ArrayLike,
+    derivative: int = 0,
+) -> npt.NDArray[np.float64]:
+    """len(s) x n_functions values (or derivatives) of the uniform B-spline basis."""
+
+@overload
+def interpolate(
+    image: ImageLike,
+    xs: npt.ArrayLike,
+    ys: npt.ArrayLike,
+    kind: InterpolationName = "cubic",
+    gradient: Literal[False] = False,
+) -> npt.NDArray[np.float64]: ...
+@overload
+def interpolate(
+    image: ImageLike,
+    xs: npt.ArrayLike,
+    ys: npt.ArrayLike,
+    kind: InterpolationName = "cubic",
+    *,
+    gradient: Literal[True],
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
