@@ -406,7 +406,15 @@ impl Band {
             .into_par_iter()
             .map(|y| {
                 let mut out = Vec::new();
-                for x in x0..=x1 {
+                let mut spans = Vec::new();
+                levelsets.row_spans(y as f64, &mut spans);
+                let columns = spans.iter().flat_map(|&[a, b]| {
+                    let a = a.ceil().max(x0 as f64) as usize;
+                    let b = b.floor().min(x1 as f64);
+                    // An empty range when the span holds no pixel column.
+                    a..if b >= a as f64 { b as usize + 1 } else { a }
+                });
+                for x in columns {
                     if thinned_out(thin, x, y) {
                         continue;
                     }

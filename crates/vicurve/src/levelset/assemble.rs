@@ -121,13 +121,17 @@ impl Problem<'_> {
                     let w = if parameter { 1.0 / f.speed } else { 1.0 };
                     return [w * f.tangent[0], w * f.tangent[1]];
                 }
-                let f = curve.frame(pr.u);
+                // The tangent from the projection's normal n = (-t_y, t_x);
+                // the speed, which varies slowly along the curve (about 1
+                // for a chord-length parametrisation), from the corners.
+                let t = [pr.normal[1], -pr.normal[0]];
                 let w = if parameter {
-                    1.0 / (f.speed * (1.0 - f.curvature * pr.r).max(MIN_TARGET_JACOBIAN))
+                    let speed = interp(&|k| corners[k].speed);
+                    1.0 / (speed * (1.0 - pr.curvature * pr.r).max(MIN_TARGET_JACOBIAN))
                 } else {
                     1.0
                 };
-                [w * f.tangent[0], w * f.tangent[1]]
+                [w * t[0], w * t[1]]
             }
             TangentSource::Levelset => {
                 // t = grad r turned by -90 degrees: (dr/dy, -dr/dx). With
@@ -161,7 +165,9 @@ impl Problem<'_> {
         };
         let h = self.mesh.h;
         let corners = self.mesh.elements[e];
+        // Uncut elements have no enriched unknowns: 4 local unknowns.
         let mut add = |xi: f64, eta: f64, w: f64, part: Option<(bool, &Cut)>| {
+            let m = if part.is_some() { 8 } else { 4 };
             let g = shape_gradients(xi, eta);
             let mut b = [[0.0; 2]; 8];
             for k in 0..4 {
@@ -176,9 +182,9 @@ impl Problem<'_> {
             }
             let t = self.target(e, xi, eta);
             let wa = w * h * h;
-            for a in 0..8 {
+            for a in 0..m {
                 sys.f[a] += wa * (b[a][0] * t[0] + b[a][1] * t[1]);
-                for c in a..8 {
+                for c in a..m {
                     sys.k[a][c] += wa * (b[a][0] * b[c][0] + b[a][1] * b[c][1]);
                 }
             }

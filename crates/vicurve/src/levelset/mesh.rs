@@ -29,6 +29,10 @@ use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 
+/// Tolerance on grid coordinates (in cells) for points on an edge: `x / h`
+/// rounds, so a pixel on a node line may land a hair off it.
+const EDGE: f64 = 1e-9;
+
 /// Marks an absent node, element or degree of freedom in index tables.
 pub(crate) const NONE: u32 = u32::MAX;
 
@@ -58,6 +62,8 @@ pub(crate) struct MeshNode {
 pub(crate) struct Mesh {
     /// Element side, pixels.
     pub h: f64,
+    /// `1 / h`.
+    inv_h: f64,
     /// Grid indices `(i, j)` of the lower-left corner of cell `(0, 0)`.
     base: [i64; 2],
     /// Cells per row and per column of the lookup table.
@@ -250,6 +256,7 @@ impl Mesh {
         }
         Ok(Mesh {
             h,
+            inv_h: 1.0 / h,
             base: [i_lo, j_lo],
             cols,
             rows,
@@ -266,8 +273,24 @@ impl Mesh {
     /// (the interpolation is continuous there). `None` outside the mesh.
     #[inline]
     pub(crate) fn locate(&self, x: f64, y: f64) -> Option<(usize, f64, f64)> {
-        let gx = x / self.h - self.base[0] as f64;
-        let gy = y / self.h - self.base[1] as f64;
+        let gx = x * self.inv_h - self.base[0] as f64;
+        let gy = y * self.inv_h - self.base[1] as f64;
+        if !(gx >= -EDGE
+            && gy >= -EDGE
+            && gx <= self.cols as f64 + EDGE
+            && gy <= self.rows as f64 + EDGE)
+        {
+            return None;
+        }
+        let (gx, gy) = (gx.max(0.0), gy.max(0.0));
+        // Non-negative: truncation is the floor.
+        let ci = (gx as usize).min(self.cols - 1);
+        let cj = (gy as usize).min(self.rows - 1);
+        let e = self.cell_element[cj * self.cols + ci];
+        if e != NONE {
+            return Some((e as usize, gx - ci as f64, gy - cj as f64));
+        }
+        // On an edge or a corner of an absent cell: a neighbour may hold it.
         for c in cells_around(gx, gy, self.cols, self.rows)
             .into_iter()
             .flatten()
@@ -281,6 +304,40 @@ impl Mesh {
             }
         }
         None
+    }
+
+    /// The intervals `[x0, x1]` (pixels, increasing, disjoint) where the
+    /// horizontal line at `y` lies in the meshed domain, into `spans`
+    /// (cleared first).
+    pub(crate) fn row_spans(&self, y: f64, spans: &mut Vec<[f64; 2]>) {
+        spans.clear();
+        let gy = y * self.inv_h - self.base[1] as f64;
+        if !(gy >= -EDGE && gy <= self.rows as f64 + EDGE) {
+            return;
+        }
+        let gy = gy.max(0.0);
+        let cj = (gy as usize).min(self.rows - 1);
+        // Near a row of nodes the line also borders the cells on its other
+        // side.
+        let f = gy - cj as f64;
+        let other = other(cj, f, self.rows);
+        let present = |ci: usize| {
+            self.cell_element[cj * self.cols + ci] != NONE
+                || other.is_some_and(|o| self.cell_element[o * self.cols + ci] != NONE)
+        };
+        let x_of = |ci: usize| (self.base[0] + ci as i64) as f64 * self.h;
+        let mut start = None;
+        for ci in 0..=self.cols {
+            let here = ci < self.cols && present(ci);
+            match (here, start) {
+                (true, None) => start = Some(ci),
+                (false, Some(s)) => {
+                    spans.push([x_of(s), x_of(ci)]);
+                    start = None;
+                }
+                _ => {}
+            }
+        }
     }
 
     /// Point of element `e` at local coordinates `(xi, eta)`, pixels.
@@ -350,15 +407,14 @@ fn node_data(curve: &SplineCurve, pos: [f64; 2], u0: f64, keep: f64) -> Option<M
 #[inline]
 fn cells_around(gx: f64, gy: f64, cols: usize, rows: usize) -> [Option<usize>; 4] {
     let mut out = [None; 4];
-    if !(gx >= 0.0 && gy >= 0.0 && gx <= cols as f64 && gy <= rows as f64) {
+    if !(gx >= 0.0 && gy >= 0.0 && gx <= cols as f64 + EDGE && gy <= rows as f64 + EDGE) {
         return out;
     }
-    const EDGE: f64 = 1e-9;
     let ci = (gx.floor() as usize).min(cols - 1);
     let cj = (gy.floor() as usize).min(rows - 1);
     let (fx, fy) = (gx - ci as f64, gy - cj as f64);
-    let xs = [Some(ci), other(ci, fx, cols, EDGE)];
-    let ys = [Some(cj), other(cj, fy, rows, EDGE)];
+    let xs = [Some(ci), other(ci, fx, cols)];
+    let ys = [Some(cj), other(cj, fy, rows)];
     let mut k = 0;
     for y in ys.into_iter().flatten() {
         for x in xs.into_iter().flatten() {
@@ -372,10 +428,10 @@ fn cells_around(gx: f64, gy: f64, cols: usize, rows: usize) -> [Option<usize>; 4
 /// The neighbouring cell index along one axis when the fractional position
 /// `f` in cell `c` is on its lower or upper edge.
 #[inline]
-fn other(c: usize, f: f64, n: usize, edge: f64) -> Option<usize> {
-    if f <= edge && c > 0 {
+fn other(c: usize, f: f64, n: usize) -> Option<usize> {
+    if f <= EDGE && c > 0 {
         Some(c - 1)
-    } else if f >= 1.0 - edge && c + 1 < n {
+    } else if f >= 1.0 - EDGE && c + 1 < n {
         Some(c + 1)
     } else {
         None

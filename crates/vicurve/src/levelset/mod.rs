@@ -338,9 +338,14 @@ impl LevelsetCoords {
     #[inline]
     pub fn eval(&self, x: f64, y: f64) -> Option<(f64, f64)> {
         let (e, xi, eta) = self.mesh.locate(x, y)?;
-        let side = self.cut.as_ref().is_some_and(|c| c.side([x, y]));
+        let side = self
+            .cut
+            .as_ref()
+            .is_some_and(|c| c.element_cut[e] && c.side([x, y]));
         let (s, r) = self.interpolate(e, xi, eta, side);
-        if self.closed && self.options.jump == Jump::Prescribed {
+        if self.closed && self.options.jump == Jump::Prescribed && !(0.0..self.length).contains(&s)
+        {
+            // Rare (near the cut), and rem_euclid is slow.
             let mut w = s.rem_euclid(self.length);
             if w >= self.length {
                 w = 0.0;
@@ -372,6 +377,14 @@ impl LevelsetCoords {
             }
         }
         (s, r)
+    }
+
+    /// The intervals `[x0, x1]` (pixels, increasing, disjoint) where the
+    /// horizontal line at `y` crosses the meshed domain, into `spans`
+    /// (cleared first): the points worth [`LevelsetCoords::eval`]uating on
+    /// a row of pixels.
+    pub fn row_spans(&self, y: f64, spans: &mut Vec<[f64; 2]>) {
+        self.mesh.row_spans(y, spans);
     }
 
     /// The nodes with their values.
