@@ -5,7 +5,7 @@ use crate::overlay::{write_png, write_svg, Layer, Style};
 use crate::Failure;
 use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, parse_stages, FitConfig, Measurement, Outcome, Polarity};
+use vicurve::fit::{measure, parse_stages, Coords, FitConfig, Measurement, Outcome, Polarity};
 use vicurve::interp::Interpolation;
 use vicurve::virtual_image::{Kind, Profile};
 use vicurve::Image;
@@ -61,8 +61,26 @@ pub struct Args {
     /// not blurred steps or lines, such as `synth paper-disc`.
     #[arg(long)]
     pub no_blur_correction: bool,
+    /// Curvilinear coordinates of the band pixels: `exact` (closest-point
+    /// projection of every pixel, the default) or `levelset` (the paper's:
+    /// values on a mesh of square elements, interpolated; biased outward by
+    /// about mesh-size^2 / (12 x radius of curvature) px).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub coords: CoordsArg,
+    /// Element side of the levelset mesh, pixels (with `--coords levelset`).
+    #[arg(long, default_value_t = 10.0, value_name = "PX")]
+    pub mesh_size: f64,
     #[command(flatten)]
     pub outputs: Outputs,
+}
+
+/// `--coords`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CoordsArg {
+    /// Exact projection of every band pixel.
+    Exact,
+    /// The paper's finite-element levelsets.
+    Levelset,
 }
 
 /// The optional output files of a measurement.
@@ -143,6 +161,12 @@ fn build_config(args: &Args) -> Result<FitConfig, Failure> {
         tolerance: args.tolerance,
         max_iterations: args.max_iter,
         blur_correction: !args.no_blur_correction,
+        coords: match args.coords {
+            CoordsArg::Exact => Coords::Exact,
+            CoordsArg::Levelset => Coords::Levelset {
+                mesh_size: args.mesh_size,
+            },
+        },
         ..FitConfig::default()
     };
     if let Some(s) = &args.stages {
