@@ -9,7 +9,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use vicurve::band::Band;
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, measure_from, Elements, FitConfig, Stage};
+use vicurve::fit::{measure, measure_from, Coords, Elements, FitConfig, Stage};
 use vicurve::interp::{Interpolation, Sampler};
 use vicurve::render::{presets, render, RenderSpec};
 use vicurve::solver::{BandCholesky, SymBandMatrix};
@@ -60,6 +60,12 @@ fn band(c: &mut Criterion) {
     let b = Basis::new(3, 25, curve.param_length(), true).unwrap();
     c.bench_function("band/build R=10 (paper disc, 25k px)", |bench| {
         bench.iter(|| Band::build(&curve, &b, 10.0, Kind::Silhouette, 512, 512).unwrap())
+    });
+    c.bench_function("band/build levelset R=10 (paper disc)", |bench| {
+        let coords = Coords::Levelset { mesh_size: 10.0 };
+        bench.iter(|| {
+            Band::build_with(&curve, &b, 10.0, Kind::Silhouette, 512, 512, 1, coords).unwrap()
+        })
     });
 }
 
