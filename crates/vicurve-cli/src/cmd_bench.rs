@@ -359,7 +359,10 @@ fn report(rows: &[PaperRow], coverage: &[CoverageRow], quick: bool) -> String {
             let (blo, bhi) = range(it.iter().copied(), |r| r.bias.abs());
             let (slo, shi) = range(it.iter().copied(), |r| r.scatter);
             let t = it.iter().map(|r| r.seconds).sum::<f64>() / it.len().max(1) as f64;
-            let _ = writeln!(s, "| {name} | {blo:.2e} – {bhi:.2e} | {slo:.2e} – {shi:.2e} | {t:.4} |");
+            let _ = writeln!(
+                s,
+                "| {name} | {blo:.2e} – {bhi:.2e} | {slo:.2e} – {shi:.2e} | {t:.4} |"
+            );
         }
         let _ = writeln!(
             s,

@@ -19,9 +19,17 @@ pub struct Args {
     /// Starting curve: `circle:CX,CY,R`, `segment:X0,Y0,X1,Y1` or
     /// `polyline:FILE.csv` (rows `x,y`, header allowed), in pixels (x =
     /// column, y = row, pixel centres at integers). It must cross or lie near
-    /// the curve to measure.
+    /// the curve to measure. Without it (silhouettes), the main silhouette is
+    /// found automatically: Otsu threshold, the largest region seen whole
+    /// (else the longest edge crossing the image), its traced boundary.
     #[arg(long)]
-    pub init: String,
+    pub init: Option<String>,
+    /// Automatic start: the region containing this point `X,Y` (pixels).
+    #[arg(long, value_name = "X,Y")]
+    pub pick: Option<String>,
+    /// Automatic start: search only this rectangle `X0,Y0,X1,Y1` (pixels).
+    #[arg(long, value_name = "X0,Y0,X1,Y1")]
+    pub roi: Option<String>,
     /// Treat a `polyline:` start as closed (last point joins the first).
     #[arg(long)]
     pub closed: bool,
@@ -89,7 +97,7 @@ pub struct Outputs {
     /// Write the result (B-spline, history, outcome, configuration) as JSON.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the samples as CSV with columns s,x,y,nx,ny,sigma.
+    /// Write the samples as CSV with columns s,x,y,nx,ny,sigma,weight.
     #[arg(long)]
     pub points: Option<PathBuf>,
     /// Write an SVG overlay (image, initial curve, band, measured curve).
@@ -110,9 +118,39 @@ impl Outputs {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
-    let init = parse_init(&args.init, args.closed)?;
     let config = build_config(&args)?;
+    let start = start_config(&args)?;
+    let explicit = match &args.init {
+        Some(spec) => Some(parse_init(spec, args.closed)?),
+        None => None,
+    };
     let image = vicurve::io::load_image(&args.image)?;
+    let init = match explicit {
+        Some(init) => init,
+        None => {
+            if args.kind == Kind::Contour {
+                return Err(Failure::Error(
+                    "the automatic start finds silhouettes only: give a starting curve with --init for a contour".into(),
+                ));
+            }
+            let found = vicurve::start::find_silhouette(&image, &start).map_err(|e| {
+                format!("{e}; give a starting curve with --init, or point at the object with --pick X,Y")
+            })?;
+            eprintln!(
+                "vicurve: automatic start: {} {} region of {} pixels (threshold {:.4}), {} curve",
+                if found.bright { "bright" } else { "dark" },
+                if start.pick.is_some() {
+                    "picked"
+                } else {
+                    "main"
+                },
+                found.region_pixels,
+                found.threshold,
+                if found.closed { "closed" } else { "open" }
+            );
+            found.curve
+        }
+    };
     let m = measure(&image, &init, &config)?;
     let path_text = args.image.display().to_string();
     write_outputs(&args.outputs, &path_text, &image, &init, &config, &m)?;
@@ -137,6 +175,39 @@ pub fn finish(m: &Measurement) -> Result<(), Failure> {
             "the fit diverged: {divergence}; start from a curve closer to the edge, or use a narrower band (--stages)"
         ))),
     }
+}
+
+/// `--pick` and `--roi`, which only make sense without `--init`.
+fn start_config(args: &Args) -> Result<vicurve::start::StartConfig, Failure> {
+    if args.init.is_some() && (args.pick.is_some() || args.roi.is_some()) {
+        return Err(Failure::Error(
+            "--pick and --roi choose an automatic start: drop --init, or drop them".into(),
+        ));
+    }
+    let numbers = |what: &str, text: &str, n: usize| -> Result<Vec<f64>, Failure> {
+        let v: Result<Vec<f64>, _> = text.split(',').map(|t| t.trim().parse::<f64>()).collect();
+        match v {
+            Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(v),
+            _ => Err(Failure::Error(format!(
+                "malformed {what} '{text}': expected {n} numbers separated by commas"
+            ))),
+        }
+    };
+    let pick = match &args.pick {
+        Some(t) => {
+            let v = numbers("--pick", t, 2)?;
+            Some([v[0], v[1]])
+        }
+        None => None,
+    };
+    let roi = match &args.roi {
+        Some(t) => {
+            let v = numbers("--roi", t, 4)?;
+            Some([v[0], v[1], v[2], v[3]])
+        }
+        None => None,
+    };
+    Ok(vicurve::start::StartConfig { pick, roi })
 }
 
 /// Parse `--init`; polylines are read from their file.

@@ -462,7 +462,10 @@ fn bench_paper_quick_writes_its_report() {
         .filter(|r| r[coords] == "\"levelset-10px\"")
         .map(|r| r[bias].parse::<f64>().unwrap())
         .collect();
-    assert!(!level.is_empty() && level.iter().all(|b| *b > 1e-2 && *b < 0.1), "{level:?}");
+    assert!(
+        !level.is_empty() && level.iter().all(|b| *b > 1e-2 && *b < 0.1),
+        "{level:?}"
+    );
     let wide: Vec<f64> = rows
         .iter()
         .filter(|r| r[study] == "\"ratio\"" && r[r_g] == "20.0")
@@ -483,4 +486,57 @@ fn bench_paper_quick_writes_its_report() {
     ] {
         assert!(report.contains(heading), "{heading}");
     }
+}
+
+/// Without `--init` a silhouette is found automatically; the start goes
+/// into the JSON; `--pick`/`--roi` errors are one line.
+#[test]
+fn automatic_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = disc(d);
+    let (json, csv) = (p(d, "auto.json"), p(d, "auto.csv"));
+    let out = vicurve(&["measure", &img, "--out", &json, "--points", &csv]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("automatic start"));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(
+        doc["initial_curve"].to_string().contains("polyline"),
+        "{}",
+        doc["initial_curve"]
+    );
+    let stats_path = p(d, "stats.json");
+    let eval = vicurve(&["eval", &csv, &truth, "--json", &stats_path]);
+    assert!(eval.status.success(), "{}", text(&eval.stderr));
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats_path).unwrap()).unwrap();
+    let max = stats["max_abs"].as_f64().unwrap();
+    assert!(max < 0.02, "max {max}");
+
+    let picked = vicurve(&["measure", &img, "--pick", "100,100", "--points", &csv]);
+    assert!(picked.status.success(), "{}", text(&picked.stderr));
+    assert_error(
+        &vicurve(&["measure", &img, "--pick", "900,5"]),
+        1,
+        "outside",
+    );
+    assert_error(
+        &vicurve(&[
+            "measure",
+            &img,
+            "--init",
+            "circle:100,100,60",
+            "--pick",
+            "100,100",
+        ]),
+        1,
+        "--pick",
+    );
+    assert_error(&vicurve(&["measure", &img, "--roi", "1,2,3"]), 1, "--roi");
+    assert_error(
+        &vicurve(&["measure", &img, "--kind", "contour"]),
+        1,
+        "--init",
+    );
 }

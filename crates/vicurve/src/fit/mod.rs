@@ -705,7 +705,7 @@ fn robust_refit(
         // a fraction of the contrast keeps quantisation and small profile
         // mismatch from passing for clutter.
         let scale = mad.max(MIN_ROBUST_SCALE * s.c.abs());
-        if !(scale > 0.0) || res.iter().all(|v| v.abs() < OUTLIER * scale) {
+        if scale.is_nan() || scale <= 0.0 || res.iter().all(|v| v.abs() < OUTLIER * scale) {
             break;
         }
         let cut = TUKEY * scale;
@@ -936,9 +936,9 @@ impl Final {
         let weight_at = |u: f64| {
             let k = (u.max(0.0) as usize).min(nbins - 1);
             let (mut sum, mut n) = (0.0, 0.0);
-            for j in k.saturating_sub(1)..=(k + 1).min(nbins - 1) {
-                sum += bins[j].0;
-                n += bins[j].1;
+            for b in &bins[k.saturating_sub(1)..=(k + 1).min(nbins - 1)] {
+                sum += b.0;
+                n += b.1;
             }
             if n > 0.0 {
                 sum / n

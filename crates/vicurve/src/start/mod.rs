@@ -229,7 +229,8 @@ fn free_run(chain: &[(usize, usize)], rect: Rect) -> Vec<(usize, usize)> {
         return Vec::new(); // all free: the region does not touch the border
     };
     // Walk once around from a blocked pixel, collecting free runs.
-    let (mut best, mut run): (Vec<(usize, usize)>, Vec<(usize, usize)>) = (Vec::new(), Vec::new());
+    let mut best: Vec<(usize, usize)> = Vec::new();
+    let mut run: Vec<(usize, usize)> = Vec::new();
     for k in 1..=n {
         let p = chain[(blocked + k) % n];
         if free(&p) {
