@@ -501,7 +501,10 @@ fn edge_from_border_to_border() {
     };
     let (m, s) = run(&spec, init, FitConfig::default());
     let pts = m.points();
-    let (first, last) = (pts[0][0].min(pts[pts.len() - 1][0]), pts[0][0].max(pts[pts.len() - 1][0]));
+    let (first, last) = (
+        pts[0][0].min(pts[pts.len() - 1][0]),
+        pts[0][0].max(pts[pts.len() - 1][0]),
+    );
     println!("border to border: {s:?}, x from {first:.1} to {last:.1}");
     assert_eq!(m.outcome, Outcome::Converged);
     assert!(first < 25.0 && last > 486.0, "x from {first} to {last}");

@@ -338,7 +338,11 @@ impl Correlation {
         });
         let outside: usize = self.acc.iter().map(|a| a.outside_count).sum();
         if outside > MAX_OUTSIDE.max(band.len() / 50) {
-            let q = self.acc.iter().find_map(|a| a.outside).unwrap_or([f64::NAN; 2]);
+            let q = self
+                .acc
+                .iter()
+                .find_map(|a| a.outside)
+                .unwrap_or([f64::NAN; 2]);
             return Err(StepFailure::LeftImage(q));
         }
         let (mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0);
