@@ -396,6 +396,21 @@ mod tests {
     }
 
     #[test]
+    fn the_benchmark_star_is_the_rust_preset() {
+        // crates/vicurve-py/bench/bench_measure.py draws it with these.
+        let mut a = SynthArgs::new(ShapeName::Star);
+        a.size = (1024, 1024);
+        a.center = Some((512.3, 511.6));
+        a.radius = Some(300.0);
+        a.amplitude = Some(0.2);
+        a.lobes = 5;
+        a.blur = 1.0;
+        a.noise = 0.01;
+        a.seed = 3;
+        assert_eq!(synth_spec(&a).unwrap(), presets::star_1024());
+    }
+
+    #[test]
     fn quantisation_matches_the_file_writer() {
         assert_eq!(quantised_sample(0.5, 255.0), 128);
         assert_eq!(quantised_sample(-1.0, 255.0), 0);
