@@ -83,7 +83,37 @@ fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Stage>>
     Ok(Some(out))
 }
 
-/// Measure a curve in an image (see the package's documentation).
+/// Measure the curve in `image` starting from `init`; returns a `Result`.
+///
+/// - `image`: a 2-D array (uint8 divided by 255, uint16 by 65535, float32
+///   or float64 as they are: the gray levels the same file gives the
+///   command-line tool) or the path of a PNG, TIFF or JPEG file.
+/// - `init`: `Circle(cx, cy, r)`, `Segment(x0, y0, x1, y1)`,
+///   `Polyline(points, closed=False)`, `Auto(pick=None, roi=None)`, the
+///   command line's text `"circle:CX,CY,R"` or `"segment:X0,Y0,X1,Y1"`,
+///   or None: the automatic start (the main silhouette; silhouettes only).
+///   It must cross or lie near the curve (within the first band).
+/// - `kind`: "silhouette" (an edge) or "contour" (a thin line).
+/// - `stages`: None (the default schedule: bands of 20, 10, 5 and 2 px,
+///   the last choosing its element length, then a stage matched to the
+///   edge's blur), a list of `(R, elements)` pairs (R the band half-width
+///   in pixels; elements a count, `"40px"` for an element length or
+///   `"auto"`), or the command line's text `"20:25,10:50,5:100"`.
+/// - `degree`: of the B-splines, 1 to 5.
+/// - `polarity`: "auto" (estimated), "positive" (bright inside, bright on
+///   the left of an open curve's direction, a bright line) or "negative";
+///   the command line's `bright-inside`, `dark-line`, ... are accepted.
+/// - `interpolation`: "cubic" (cubic B-spline), "bilinear" or "keys".
+/// - `tolerance`: convergence on the displacement update, pixels.
+/// - `max_iterations`: per stage.
+/// - `blur_correction`: estimate the blur and report the true boundary or
+///   centre line; turn it off for images that are not blurred steps or
+///   lines (such as `synth("paper-disc")`).
+///
+/// Raises `FitError` (with the partial result in `.result`) when the fit
+/// diverges, `ValueError` for bad arguments, images or curves,
+/// `FileNotFoundError` for a missing file; warns (`RuntimeWarning`) when the
+/// iteration limit is reached. The fit runs with the GIL released.
 #[pyfunction]
 #[pyo3(signature = (
     image, init = None, *, kind = "silhouette", stages = None, degree = 3,
@@ -166,15 +196,32 @@ pub fn measure(
     }
 }
 
-/// Render a test image of exactly known geometry (see the package's
-/// documentation); returns `(image, truth)`.
+/// Render a test image of exactly known geometry, as `vicurve synth`;
+/// returns `(image, truth)`.
+///
+/// `shape` is "disc", "ellipse", "star", "sine-edge", "ring", "sine-line"
+/// or "paper-disc" (the paper's 512 x 512 disc of radius 200, drawn with
+/// the silhouette profile). Options (pixels, degrees; the command line's
+/// defaults): `size=(width, height)`, `center=(x, y)` (image centre moved
+/// by (0.3, -0.2)), `radius` (30 % of the smaller side), `axes=(a, b)`
+/// (ellipse), `angle`, `amplitude` (star: relative; sine: pixels), `lobes`,
+/// `phase`, `wavelength`, `y0`, `line` (full width of a line: a contour),
+/// `profile` (draw with the virtual profile of this half-width instead of
+/// exact pixel coverage), `blur` (Gaussian, sigma), `noise` (standard
+/// deviation as a fraction of the contrast), `seed`, `bits` (8: uint8, 16:
+/// uint16, None: float64 without quantisation), `levels=(background,
+/// foreground)` in [0, 1] (0.2, 0.8).
+///
+/// The image is a (height, width) array equal to the file the command line
+/// writes; `truth` is the content of its truth file (the exact curve, the
+/// kind, how the image was made), which `eval` takes.
 #[pyfunction]
 #[pyo3(signature = (
     shape, *, size = (512, 512), center = None, radius = None, axes = None,
     angle = 20.0, amplitude = None, lobes = 5, phase = 0.0, wavelength = None,
     y0 = None, line = None, profile = None, blur = 0.0, noise = 0.0, seed = 1,
     bits = Some(8), levels = None
-))]
+), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, noise=0.0, seed=1, bits=8, levels=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn synth<'py>(
     py: Python<'py>,

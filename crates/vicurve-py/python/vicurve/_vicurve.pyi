@@ -1,20 +1,34 @@
 """Type stubs of the native module ``vicurve._vicurve`` (see ``vicurve``)."""
 
 import os
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "__version__",
+    "FitError",
+    "Circle",
+    "Segment",
+    "Polyline",
+    "Auto",
+    "Result",
+    "measure",
+    "synth",
+    "eval",
+    "basis_values",
+    "interpolate",
+]
 
-ImageLike = Union[npt.NDArray[Any], str, "os.PathLike[str]"]
+_ImageLike = Union[npt.NDArray[Any], str, "os.PathLike[str]"]
 """A 2-D array (uint8, uint16, float32, float64) or the path of an image file."""
 
-ArrayLike2 = Union[npt.ArrayLike, Sequence[Sequence[float]]]
+_ArrayLike2 = Union[npt.ArrayLike, Sequence[Sequence[float]]]
 
-Kind = Literal["silhouette", "contour"]
-PolarityName = Literal[
+_Kind = Literal["silhouette", "contour"]
+_PolarityName = Literal[
     "auto",
     "positive",
     "negative",
@@ -25,12 +39,12 @@ PolarityName = Literal[
     "bright-line",
     "dark-line",
 ]
-InterpolationName = Literal["cubic", "bilinear", "keys", "cubic_b_spline"]
-StageElements = Union[int, str]
+_InterpolationName = Literal["cubic", "bilinear", "keys", "cubic_b_spline"]
+_StageElements = Union[int, str]
 """A number of elements, an element length such as ``"40px"``, or ``"auto"``."""
-Stages = Union[Sequence[Tuple[float, StageElements]], str]
+_Stages = Union[Sequence[Tuple[float, _StageElements]], str]
 """``[(R, elements), ...]`` or the command line's text ``"20:25,10:50"``."""
-ShapeName = Literal[
+_ShapeName = Literal[
     "disc", "ellipse", "star", "sine-edge", "ring", "sine-line", "paper-disc"
 ]
 
@@ -39,14 +53,16 @@ class FitError(RuntimeError):
 
     result: "Result"
 
+@final
 class Circle:
     """A circle of centre (cx, cy) and radius r, pixels: a closed start."""
 
     cx: float
     cy: float
     r: float
-    def __init__(self, cx: float, cy: float, r: float) -> None: ...
+    def __new__(cls, cx: float, cy: float, r: float) -> "Circle": ...
 
+@final
 class Segment:
     """The segment from (x0, y0) to (x1, y1), pixels: an open start."""
 
@@ -54,30 +70,33 @@ class Segment:
     y0: float
     x1: float
     y1: float
-    def __init__(self, x0: float, y0: float, x1: float, y1: float) -> None: ...
+    def __new__(cls, x0: float, y0: float, x1: float, y1: float) -> "Segment": ...
 
+@final
 class Polyline:
     """A polyline through N points (N x 2, x and y in pixels), open or closed."""
 
     closed: bool
-    def __init__(self, points: ArrayLike2, closed: bool = False) -> None: ...
+    def __new__(cls, points: _ArrayLike2, closed: bool = False) -> "Polyline": ...
     @property
     def points(self) -> npt.NDArray[np.float64]:
         """The vertices, N x 2 float64."""
 
+@final
 class Auto:
     """The automatic start: Otsu threshold, main (or picked) region, its boundary."""
 
     pick: Optional[Tuple[float, float]]
     roi: Optional[Tuple[float, float, float, float]]
-    def __init__(
-        self,
+    def __new__(
+        cls,
         pick: Optional[Tuple[float, float]] = None,
         roi: Optional[Tuple[float, float, float, float]] = None,
-    ) -> None: ...
+    ) -> "Auto": ...
 
-InitialCurve = Union[Circle, Segment, Polyline, Auto, str, None]
+_InitialCurve = Union[Circle, Segment, Polyline, Auto, str, None]
 
+@final
 class Result:
     """The result of ``measure``."""
 
@@ -136,14 +155,14 @@ class Result:
         """The JSON document ``vicurve measure --out`` writes for the same input."""
 
 def measure(
-    image: ImageLike,
-    init: InitialCurve = None,
+    image: _ImageLike,
+    init: _InitialCurve = None,
     *,
-    kind: Kind = "silhouette",
-    stages: Optional[Stages] = None,
+    kind: _Kind = "silhouette",
+    stages: Optional[_Stages] = None,
     degree: int = 3,
-    polarity: PolarityName = "auto",
-    interpolation: InterpolationName = "cubic",
+    polarity: _PolarityName = "auto",
+    interpolation: _InterpolationName = "cubic",
     tolerance: float = 1e-4,
     max_iterations: int = 200,
     blur_correction: bool = True,
@@ -158,7 +177,7 @@ def measure(
     """
 
 def synth(
-    shape: ShapeName,
+    shape: _ShapeName,
     *,
     size: Tuple[int, int] = (512, 512),
     center: Optional[Tuple[float, float]] = None,
@@ -185,7 +204,7 @@ def synth(
     truth file's content as a dict.
     """
 
-def eval(points: ArrayLike2, truth: Union[Dict[str, Any], str, "os.PathLike[str]"]) -> Dict[str, Any]:
+def eval(points: _ArrayLike2, truth: Union[Dict[str, Any], str, "os.PathLike[str]"]) -> Dict[str, Any]:
     """points (count), bias, scatter, rms, max_abs (pixels) and distances (array)."""
 
 def basis_values(
@@ -200,18 +219,18 @@ def basis_values(
 
 @overload
 def interpolate(
-    image: ImageLike,
+    image: _ImageLike,
     xs: npt.ArrayLike,
     ys: npt.ArrayLike,
-    kind: InterpolationName = "cubic",
+    kind: _InterpolationName = "cubic",
     gradient: Literal[False] = False,
 ) -> npt.NDArray[np.float64]: ...
 @overload
 def interpolate(
-    image: ImageLike,
+    image: _ImageLike,
     xs: npt.ArrayLike,
     ys: npt.ArrayLike,
-    kind: InterpolationName = "cubic",
+    kind: _InterpolationName = "cubic",
     *,
     gradient: Literal[True],
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
