@@ -1,11 +1,13 @@
 """Time vicurve.measure from Python on the images of the Rust benchmarks.
 
-The Rust figures are those of ``cargo bench -p vicurve --bench pipeline``
-(docs/benchmarks.md, "Speed"): the same images (``vicurve.synth`` draws the
-presets ``paper_disc`` and ``star_1024`` exactly), the same starting
-circles and settings, measured "from the image" (the cubic prefilter is part
-of every call, as it is of a Python call). What Python adds: converting the
-array to the engine's float64 image, and building the result object.
+The Rust side is ``cargo run --release -p vicurve-py --example
+bench_measure -- N``: the same images (``vicurve.synth`` draws the presets
+``paper_disc`` and ``star_1024`` exactly), starting circles and settings,
+measured "from the image" like the criterion benches "paper disc, one stage
+(from the image)" and "star 1024x1024, default schedule (from the image)"
+of docs/benchmarks.md (the cubic prefilter is part of every call, as it is
+of a Python call). What Python adds: converting the array to the engine's
+float64 image, and building the result object.
 
     python crates/vicurve-py/bench/bench_measure.py [--repeat N]
 
