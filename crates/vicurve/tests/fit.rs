@@ -134,7 +134,7 @@ fn exact_coverage_disc_noiseless() {
 /// sub-pixel positions, 8-bit, noiseless, default settings: the true
 /// boundary (not the blurred image's half-level, which lies `s^2 / 2 rho`
 /// inside: 0.013 px at blur 2 and 0.05 px at blur 4 here) within 2e-3 px of
-/// bias (measured: under 1.1e-4 px up to blur 2, -1.8e-3 px at blur 4) and
+/// bias (measured: under 1.1e-4 px up to blur 2, -1.7e-3 px at blur 4) and
 /// 3e-3 px of scatter (2.8e-3 at blur 4, where the 8-bit quantisation weighs
 /// most on the flat edge), with the blur itself fitted within 0.05 px.
 #[test]

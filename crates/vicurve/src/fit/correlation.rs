@@ -30,7 +30,8 @@
 //!
 //! # Pulling the image or pushing the profile
 //! The method samples `f` at the displaced pixels (`pull back`, above),
-//! which interpolates the physical image. [`Correlation::new_pushed`] instead
+//! which interpolates the physical image. With the pixel-edge profile
+//! [`Correlation::prepare`] instead
 //! keeps `f` at the pixel centres, exactly as recorded, and moves the virtual
 //! profile: `g = a + c gamma(r - U(s))`, `r - U` being the pixel's distance
 //! to the displaced curve to first order (exact at `U = 0`, so a stage that
@@ -228,12 +229,22 @@ impl Correlation {
         })
     }
 
+    /// The system for `band`, comparing as its profile requires: the
+    /// pixel-edge profile is pushed (module docs), the paper's profiles pull
+    /// the image back.
+    pub fn prepare(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
+        match band.profile() {
+            Profile::PixelEdge { .. } => Correlation::new_pushed(band, basis, sampler),
+            Profile::Paper { .. } => Correlation::new(band, basis),
+        }
+    }
+
     /// [`Correlation::new`] for the pushed profile (module docs): the
     /// image's values at the band pixels are read once here.
     ///
     /// Errors: those of `new`, and [`Error::BandOutsideImage`] when a band
     /// pixel has no value.
-    pub fn new_pushed(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
+    fn new_pushed(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
         let values = band
             .pos
             .iter()
@@ -514,11 +525,6 @@ impl Correlation {
             }
         };
         Some(a + c * gamma - f)
-    }
-
-    /// Whether the profile is pushed (module docs).
-    pub fn is_pushed(&self) -> bool {
-        self.pushed.is_some()
     }
 
     /// Estimate the variance of the image noise from the residuals at

@@ -234,11 +234,7 @@ pub fn measure_from(
                 Err(e) => return Err(e),
             };
             let band_pixels = band.len();
-            let prepared = match pushed {
-                Some(_) => Correlation::new_pushed(band, basis.clone(), sampler),
-                None => Correlation::new(band, basis.clone()),
-            };
-            let mut corr = match prepared {
+            let mut corr = match Correlation::prepare(band, basis.clone(), sampler) {
                 Ok(c) => c,
                 Err(e) if first_band => return Err(e),
                 Err(e) if appended => {
@@ -578,7 +574,6 @@ fn refine(
     config: &FitConfig,
     (r, profile): (f64, Profile),
 ) -> Result<(Correlation, Vec<f64>, correlation::Step, usize)> {
-    let pushed = matches!(profile, Profile::PixelEdge { .. });
     let closed = reference.is_closed();
     let min_el = if closed { config.degree + 1 } else { 1 };
     let length = reference.param_length();
@@ -609,12 +604,7 @@ fn refine(
         ) else {
             break;
         };
-        let prepared = if pushed {
-            Correlation::new_pushed(band, basis, sampler)
-        } else {
-            Correlation::new(band, basis)
-        };
-        let Ok(mut fine) = prepared else {
+        let Ok(mut fine) = Correlation::prepare(band, basis, sampler) else {
             break;
         };
         let mut fine_lambda = vec![0.0; fine.n_unknowns()];
@@ -729,12 +719,9 @@ fn robust_refit(
         for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
             *w = b * k;
         }
-        let prepared = if corr.is_pushed() {
-            Correlation::new_pushed(band, corr.basis.clone(), sampler)
-        } else {
-            Correlation::new(band, corr.basis.clone())
+        let Ok(mut next) = Correlation::prepare(band, corr.basis.clone(), sampler) else {
+            break;
         };
-        let Ok(mut next) = prepared else { break };
         next.robust = robust;
         let mut next_lambda = lambda.clone();
         let mut next_step = None;

@@ -450,24 +450,7 @@ pub(crate) fn star_min_curvature_radius(shape: &Shape) -> f64 {
         }
     }
     // Golden-section search for the maximum of |k| around the best sample.
-    let (mut a, mut b) = ((best_i as f64 - 1.0) * h, (best_i as f64 + 1.0) * h);
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
-    let (mut kc, mut kd) = (kappa(c), kappa(d));
-    for _ in 0..80 {
-        if kc > kd {
-            b = d;
-            d = c;
-            kd = kc;
-            c = b - r * (b - a);
-            kc = kappa(c);
-        } else {
-            a = c;
-            c = d;
-            kc = kd;
-            d = a + r * (b - a);
-            kd = kappa(d);
-        }
-    }
-    1.0 / best.max(kc).max(kd)
+    let (a, b) = ((best_i as f64 - 1.0) * h, (best_i as f64 + 1.0) * h);
+    let peak = crate::psf::golden(a, b, 80, |s| -kappa(s));
+    1.0 / best.max(kappa(peak))
 }
