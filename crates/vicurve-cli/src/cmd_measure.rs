@@ -5,7 +5,9 @@ use crate::overlay::{write_png, write_svg, Layer, Style};
 use crate::Failure;
 use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, parse_stages, Coords, FitConfig, Measurement, Outcome, Polarity};
+use vicurve::fit::{
+    measure, parse_stages, Coords, FitConfig, LevelModel, Measurement, Outcome, Polarity,
+};
 use vicurve::interp::Interpolation;
 use vicurve::virtual_image::{Kind, Profile};
 use vicurve::Image;
@@ -78,8 +80,22 @@ pub struct Args {
     /// Element side of the levelset mesh, pixels (with `--coords levelset`).
     #[arg(long, default_value_t = 10.0, value_name = "PX")]
     pub mesh_size: f64,
+    /// Gray levels of the virtual image: `varying` (dark level and contrast
+    /// follow uneven light along the curve, elements of 128 px; the
+    /// default), `varying:LEN` (elements of LEN px) or `global` (one pair
+    /// for the whole curve, the paper's).
+    #[arg(long, default_value = "varying", value_name = "MODEL")]
+    pub levels: String,
+    /// Fit a shape to the measured curve: `circle`, `ellipse`, `line` or
+    /// `polygon:N` (its parameters with uncertainties are printed and
+    /// written as `model` in `--out`; `--points` samples the shape).
+    #[arg(long, value_name = "MODEL")]
+    pub model: Option<vicurve::model::ShapeModel>,
     #[command(flatten)]
     pub outputs: Outputs,
+    /// `--dxf`, `--svg-curve` (see `cmd_export`).
+    #[command(flatten)]
+    pub cad: crate::cmd_export::CurveFiles,
 }
 
 /// `--coords`.
@@ -119,6 +135,7 @@ impl Outputs {
 
 pub fn run(args: Args) -> Result<(), Failure> {
     let config = build_config(&args)?;
+    args.cad.check(config.degree)?;
     let start = start_config(&args)?;
     let explicit = match &args.init {
         Some(spec) => Some(parse_init(spec, args.closed)?),
@@ -153,8 +170,16 @@ pub fn run(args: Args) -> Result<(), Failure> {
     };
     let m = measure(&image, &init, &config)?;
     let path_text = args.image.display().to_string();
+    let size = Some((image.width(), image.height()));
+    let cad = args.cad.write(&m.curve_data(), &path_text, size);
+    if let Some(model) = args.model {
+        cad?;
+        let (o, p) = (&args.outputs, path_text.as_str());
+        return crate::model_output::run(model, o, p, &image, &init, &config, &m);
+    }
     write_outputs(&args.outputs, &path_text, &image, &init, &config, &m)?;
-    if !args.outputs.any() {
+    cad?;
+    if !args.outputs.any() && !args.cad.any() {
         print_summary(&config, &m);
     }
     finish(&m)
@@ -246,8 +271,26 @@ fn build_config(args: &Args) -> Result<FitConfig, Failure> {
     if let Some(i) = &args.interp {
         config.interpolation = parse_interp(i)?;
     }
+    config.levels = parse_levels(&args.levels)?;
     config.validate()?;
     Ok(config)
+}
+
+/// `--levels global|varying|varying:LEN`.
+pub fn parse_levels(s: &str) -> Result<LevelModel, Failure> {
+    let bad = || {
+        Failure::Error(format!(
+            "--levels '{s}' is not understood (expected global, varying or varying:LEN with LEN in pixels, e.g. varying:200)"
+        ))
+    };
+    match s.split_once(':') {
+        None if s == "global" => Ok(LevelModel::Global),
+        None if s == "varying" => Ok(LevelModel::default()),
+        Some(("varying", len)) => Ok(LevelModel::Varying {
+            element_length: len.trim().parse().map_err(|_| bad())?,
+        }),
+        _ => Err(bad()),
+    }
 }
 
 pub fn parse_interp(s: &str) -> Result<Interpolation, Failure> {
@@ -372,6 +415,7 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
     if let Some(a) = m.area() {
         println!("area:        {:.4} px^2", a);
     }
+    print_closed_measures(m);
     let last_profile = m.stages.last().map(|s| s.profile);
     if let Some(Profile::PixelEdge { blur }) = last_profile {
         println!(
@@ -401,5 +445,52 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
             "sigma:       {:.2e} px (mean noise uncertainty of the position)",
             mean
         );
+    }
+}
+
+/// The best-fit circle and ellipse of a closed curve (or why there are
+/// none), for the summary.
+fn print_closed_measures(m: &Measurement) {
+    if !m.curve.is_closed() {
+        return;
+    }
+    match vicurve::derived::closed_measures(m) {
+        Ok(d) => {
+            let (c, e) = (d.circle, d.ellipse);
+            println!(
+                "centroid:    ({:.4}, {:.4}) px; equivalent diameter {:.4} px",
+                d.centroid[0], d.centroid[1], d.equivalent_diameter
+            );
+            println!(
+                "circle:      centre ({:.4} +- {:.1e}, {:.4} +- {:.1e}), radius {:.4} +- {:.1e} px (rms distance {:.2e})",
+                c.cx, c.sigma_cx, c.cy, c.sigma_cy, c.r, c.sigma_r, c.rms
+            );
+            println!(
+                "ellipse:     centre ({:.4}, {:.4}), semi-axes {:.4} +- {:.1e} and {:.4} +- {:.1e} px, angle {:.3} deg +- {:.1e} (counterclockwise on screen from +x; rms distance {:.2e})",
+                e.cx, e.cy, e.a, e.sigma_a, e.b, e.sigma_b, e.angle.to_degrees(), e.sigma_angle.to_degrees(), e.rms
+            );
+        }
+        Err(err) => println!("circle:      none ({err})"),
+    }
+}
+
+#[cfg(test)]
+mod levels_tests {
+    use super::parse_levels;
+    use vicurve::fit::LevelModel;
+
+    #[test]
+    fn levels_argument() {
+        assert_eq!(parse_levels("global").ok(), Some(LevelModel::Global));
+        assert_eq!(parse_levels("varying").ok(), Some(LevelModel::default()));
+        assert_eq!(
+            parse_levels("varying:200").ok(),
+            Some(LevelModel::Varying {
+                element_length: 200.0
+            })
+        );
+        for bad in ["", "vary", "varying:", "varying:x", "global:3"] {
+            assert!(parse_levels(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -25,6 +25,12 @@ pub enum ShapeName {
     /// silhouette profile of half-width 10 px at pixel centres, 8-bit
     /// (not a blurred step: measure it with `--no-blur-correction`).
     PaperDisc,
+    /// A sequence: a bright bar (a tensile specimen) whose width narrows
+    /// progressively at one section, `--frames` images in the folder
+    /// `--out` with their truth (`truth.json`) and the job file that
+    /// measures them (`job.toml`, for `vicurve run`). Defaults: 400x200,
+    /// 8 frames, blur 1.5, noise 0.001, 16 bits.
+    Necking,
 }
 
 /// Gray levels BACKGROUND,FOREGROUND when not given.
@@ -35,15 +41,15 @@ const DEFAULT_LEVELS: &str = "0.2,0.8";
 pub struct Args {
     /// What to draw.
     pub shape: ShapeName,
-    /// Output image (.png or .tif).
+    /// Output image (.png or .tif); for `necking`, the output folder.
     #[arg(long)]
     pub out: PathBuf,
     /// Output truth file (JSON): the exact curve and how the image was made.
     #[arg(long)]
     pub truth: Option<PathBuf>,
-    /// Image size WIDTHxHEIGHT, pixels.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
+    /// Image size WIDTHxHEIGHT, pixels (default 512x512; necking 400x200).
+    #[arg(long)]
+    pub size: Option<String>,
     /// Centre X,Y of closed shapes, pixels (default: the image centre, moved
     /// off the pixel grid by (0.3, -0.2)).
     #[arg(long)]
@@ -82,19 +88,22 @@ pub struct Args {
     /// pixel centres (the paper's method) instead of exact pixel coverage.
     #[arg(long)]
     pub profile: Option<f64>,
-    /// Gaussian blur, standard deviation in pixels.
-    #[arg(long, default_value_t = 0.0)]
-    pub blur: f64,
+    /// Gaussian blur, standard deviation in pixels (default 0; necking 1.5).
+    #[arg(long)]
+    pub blur: Option<f64>,
     /// Additive Gaussian noise, standard deviation as a fraction of the
-    /// contrast (0.01 = 1 %).
-    #[arg(long, default_value_t = 0.0)]
-    pub noise: f64,
+    /// contrast (0.01 = 1 %; default 0, necking 0.001).
+    #[arg(long)]
+    pub noise: Option<f64>,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Bits per pixel of the saved image: 8 or 16.
+    /// Bits per pixel of the saved image: 8 or 16 (default 8; necking 16).
+    #[arg(long)]
+    pub bits: Option<u8>,
+    /// Necking: number of frames.
     #[arg(long, default_value_t = 8)]
-    pub bits: u8,
+    pub frames: usize,
     /// Gray levels BACKGROUND,FOREGROUND in [0, 1] (foreground: inside
     /// closed shapes, above a sine edge, the line of a contour).
     #[arg(long, default_value = DEFAULT_LEVELS)]
@@ -102,9 +111,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.shape == ShapeName::Necking {
+        return crate::synth_sequence::necking(&args);
+    }
     let spec = spec_from_args(&args)?;
     let image = render(&spec)?;
-    vicurve::io::save_image(&args.out, &image, args.bits)?;
+    let bits = args.bits.unwrap_or(8);
+    vicurve::io::save_image(&args.out, &image, bits)?;
     if let Some(t) = &args.truth {
         Truth::from_spec(&spec).save(t)?;
     }
@@ -113,7 +126,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         args.out.display(),
         spec.width,
         spec.height,
-        args.bits,
+        bits,
         args.truth
             .as_ref()
             .map(|t| format!(", truth in {}", t.display()))
@@ -122,7 +135,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     Ok(())
 }
 
-fn numbers(what: &str, text: &str, sep: char, count: usize) -> Result<Vec<f64>, Failure> {
+pub fn numbers(what: &str, text: &str, sep: char, count: usize) -> Result<Vec<f64>, Failure> {
     let v: Result<Vec<f64>, _> = text.split(sep).map(|t| t.trim().parse::<f64>()).collect();
     match v {
         Ok(v) if v.len() == count && v.iter().all(|x| x.is_finite()) => Ok(v),
@@ -134,20 +147,9 @@ fn numbers(what: &str, text: &str, sep: char, count: usize) -> Result<Vec<f64>, 
 
 /// The render specification described by the arguments.
 pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
-    if a.bits != 8 && a.bits != 16 {
-        return Err(Failure::Error(format!(
-            "--bits {} (expected 8 or 16)",
-            a.bits
-        )));
-    }
-    let size = numbers("size", &a.size, 'x', 2)?;
-    if size.iter().any(|v| *v < 1.0 || v.fract() != 0.0) {
-        return Err(Failure::Error(format!(
-            "--size '{}': expected WIDTHxHEIGHT in whole pixels",
-            a.size
-        )));
-    }
-    let (w, h) = (size[0], size[1]);
+    let bits = check_bits(a.bits.unwrap_or(8))?;
+    let (w, h) = parse_size(a.size.as_deref().unwrap_or("512x512"))?;
+    let (blur, noise) = (a.blur.unwrap_or(0.0), a.noise.unwrap_or(0.0));
     let levels = numbers("levels", &a.levels, ',', 2)?;
     if a.shape == ShapeName::PaperDisc {
         // The preset (512x512, levels 0 and 1 unless given), with the
@@ -159,10 +161,10 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         if a.levels != DEFAULT_LEVELS {
             (spec.background, spec.foreground) = (levels[0], levels[1]);
         }
-        spec.blur_sigma = a.blur;
-        spec.noise = a.noise;
+        spec.blur_sigma = blur;
+        spec.noise = noise;
         spec.seed = a.seed;
-        spec.bits = Some(a.bits);
+        spec.bits = Some(bits);
         spec.validate()?;
         return Ok(spec);
     }
@@ -210,6 +212,11 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
             phase,
         },
         ShapeName::SineEdge | ShapeName::SineLine => sine(),
+        ShapeName::Necking => {
+            return Err(Failure::Error(
+                "necking is a sequence: see synth_sequence".into(),
+            ))
+        }
     };
     let line = match a.shape {
         ShapeName::Ring | ShapeName::SineLine => Some(a.line.unwrap_or(3.0)),
@@ -233,11 +240,30 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
             Some(half_width) => Method::Profile { half_width },
             None => Method::Coverage,
         },
-        blur_sigma: a.blur,
-        noise: a.noise,
+        blur_sigma: blur,
+        noise,
         seed: a.seed,
-        bits: Some(a.bits),
+        bits: Some(bits),
     };
     spec.validate()?;
     Ok(spec)
+}
+
+/// `8` or `16`.
+pub fn check_bits(bits: u8) -> Result<u8, Failure> {
+    if bits != 8 && bits != 16 {
+        return Err(Failure::Error(format!("--bits {bits} (expected 8 or 16)")));
+    }
+    Ok(bits)
+}
+
+/// `WIDTHxHEIGHT` in whole pixels.
+pub fn parse_size(text: &str) -> Result<(f64, f64), Failure> {
+    let size = numbers("size", text, 'x', 2)?;
+    if size.iter().any(|v| *v < 1.0 || v.fract() != 0.0) {
+        return Err(Failure::Error(format!(
+            "--size '{text}': expected WIDTHxHEIGHT in whole pixels"
+        )));
+    }
+    Ok((size[0], size[1]))
 }

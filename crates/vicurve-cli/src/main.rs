@@ -3,17 +3,31 @@
 //! Errors are printed as one line, `vicurve: error: ...`, and the exit code
 //! says what happened: 0 success (a fit that hit its iteration limit prints
 //! a warning), 1 an error in the input or the files, 2 a usage error, 3 a
-//! fit that diverged (its outputs are still written).
+//! fit that diverged (its outputs are still written) or, for a sequence
+//! (`track`, `run`), frames that failed (the others are measured and
+//! written; `summary.csv` says which failed and why).
 
 mod bench_paper;
 mod cmd_bench;
 mod cmd_demo;
 mod cmd_eval;
+mod cmd_export;
 mod cmd_measure;
+mod cmd_mesh;
+mod cmd_run;
 mod cmd_synth;
+mod cmd_track;
+mod frame;
+mod job;
+mod model_output;
 mod output;
 mod overlay;
 mod plot;
+mod plot_width;
+mod resume;
+mod sequence;
+mod summary;
+mod synth_sequence;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -40,6 +54,16 @@ enum Command {
     Demo(cmd_demo::Args),
     /// Benchmark studies: `bench paper` re-runs the paper's section 7.
     Bench(cmd_bench::Args),
+    /// Track a curve through a sequence of images, each frame started from
+    /// the previous frame's result.
+    Track(cmd_track::Args),
+    /// Run a job file (TOML): images, named curves, widths, outputs.
+    Run(cmd_run::Args),
+    /// Export a measured curve from its result file: DXF SPLINE (CAD),
+    /// SVG of exact cubic Béziers.
+    Export(cmd_export::Args),
+    /// The NURBS surface patch between two measured edges: JSON, VTK (.vtu).
+    Mesh(cmd_mesh::Args),
 }
 
 /// How a command failed.
@@ -70,6 +94,10 @@ fn main() -> ExitCode {
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
         Command::Bench(a) => cmd_bench::run(a),
+        Command::Track(a) => cmd_track::run(a),
+        Command::Run(a) => cmd_run::run(a),
+        Command::Export(a) => cmd_export::run(a),
+        Command::Mesh(a) => cmd_mesh::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -61,7 +61,7 @@ const LEGEND_W: f64 = 190.0;
 const FONT: f64 = 13.0;
 
 /// Distinct colours for up to eight series (then they repeat).
-const PALETTE: [[u8; 3]; 8] = [
+pub(crate) const PALETTE: [[u8; 3]; 8] = [
     [31, 119, 180],
     [214, 39, 40],
     [44, 160, 44],
@@ -74,7 +74,7 @@ const PALETTE: [[u8; 3]; 8] = [
 
 /// Where text is anchored horizontally.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Anchor {
+pub(crate) enum Anchor {
     Start,
     Middle,
     End,
@@ -82,7 +82,7 @@ enum Anchor {
 
 /// The drawing operations the layout needs (coordinates in SVG units, y
 /// down).
-trait Canvas {
+pub(crate) trait Canvas {
     fn line(&mut self, pts: &[(f64, f64)], rgb: [u8; 3], width: f64, dash: bool);
     fn dot(&mut self, x: f64, y: f64, r: f64, rgb: [u8; 3]);
     /// Text whose baseline's anchor point is `(x, y)`; `vertical` turns it
@@ -434,27 +434,48 @@ impl Canvas for PngCanvas {
 /// Write `fig` as an SVG file.
 pub fn write_svg(fig: &Figure, path: &Path) -> Result<(), String> {
     let (w, h) = figure_size(fig);
+    write_svg_with(w, h, path, |c| draw(fig, c))
+}
+
+/// Write a PNG of `fig`, twice the SVG's size.
+pub fn write_png(fig: &Figure, path: &Path) -> Result<(), String> {
+    let (w, h) = figure_size(fig);
+    write_png_with(w, h, path, |c| draw(fig, c))
+}
+
+/// Write an SVG of `w x h` units drawn by `paint` (for other layouts than
+/// [`Figure`]'s, sharing the canvases).
+pub(crate) fn write_svg_with(
+    w: f64,
+    h: f64,
+    path: &Path,
+    paint: impl FnOnce(&mut dyn Canvas),
+) -> Result<(), String> {
     let mut c = SvgCanvas(String::new());
     let _ = writeln!(
         c.0,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">"
     );
     let _ = writeln!(c.0, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    draw(fig, &mut c);
+    paint(&mut c);
     c.0.push_str("</svg>\n");
     std::fs::write(path, c.0).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-/// Write `fig` as a PNG file, twice the SVG's size.
-pub fn write_png(fig: &Figure, path: &Path) -> Result<(), String> {
-    let (w, h) = figure_size(fig);
+/// Write a PNG of the `w x h` units drawn by `paint`, at twice that size.
+pub(crate) fn write_png_with(
+    w: f64,
+    h: f64,
+    path: &Path,
+    paint: impl FnOnce(&mut dyn Canvas),
+) -> Result<(), String> {
     let scale = 2.0;
     let fail = |e: String| format!("cannot write {}: {e}", path.display());
     let mut pixmap = Pixmap::new((w * scale) as u32, (h * scale) as u32)
         .ok_or_else(|| fail("cannot allocate the image".into()))?;
     pixmap.fill(tiny_skia::Color::WHITE);
     let mut c = PngCanvas { pixmap, scale };
-    draw(fig, &mut c);
+    paint(&mut c);
     let png = c.pixmap.encode_png().map_err(|e| fail(e.to_string()))?;
     std::fs::write(path, png).map_err(|e| fail(e.to_string()))
 }

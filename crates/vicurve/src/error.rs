@@ -126,6 +126,15 @@ pub enum Error {
         /// Index of the failing pivot.
         index: usize,
     },
+    /// A shape model ([`crate::model`]) does not suit the measured curve
+    /// (a line for a closed curve, a polygon with more sides than corners).
+    #[error("the {model} model does not fit the measured curve: {reason}")]
+    ModelMismatch {
+        /// The model, as the user wrote it (`circle`, `polygon:5`, ...).
+        model: String,
+        /// Why, and what to try.
+        reason: String,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -10,12 +10,16 @@
 
 pub mod band;
 pub mod curve;
+pub mod derived;
 pub mod error;
+pub mod export;
 pub mod fit;
 pub mod image;
 pub mod interp;
 pub mod io;
 pub mod levelset;
+pub mod model;
+pub mod nurbs;
 pub mod psf;
 pub mod render;
 pub mod report;

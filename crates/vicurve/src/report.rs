@@ -21,7 +21,8 @@
 //! ```
 
 use crate::curve::{InitialCurve, SplineCurveData};
-use crate::fit::{FitConfig, Measurement, Outcome, StageReport};
+use crate::derived::Derived;
+use crate::fit::{FitConfig, LevelSample, Measurement, Outcome, StageReport};
 use crate::psf::EdgeSpread;
 use crate::virtual_image::Kind;
 use serde::Serialize;
@@ -57,6 +58,9 @@ pub struct ResultFile<'a> {
     /// Area enclosed by a closed measured curve, square pixels (`None` for
     /// open curves).
     pub area: Option<f64>,
+    /// Derived measurements: closed-curve measures (best-fit circle and
+    /// ellipse...) and a curvature summary, see [`crate::derived`].
+    pub derived: Derived,
     /// The edge's estimated blur, see [`crate::psf`].
     pub edge_spread: Option<EdgeSpread>,
     /// Whether the blur's curvature shift was removed from the curve.
@@ -82,12 +86,18 @@ pub struct InputInfo<'a> {
 }
 
 /// The virtual image's gray levels at the end of the fit.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct GrayLevels {
-    /// Level at `gamma = 0` (outside / line ground).
+    /// Level at `gamma = 0` (outside / line ground); the mean over the band
+    /// when the levels vary.
     pub a: f64,
-    /// Contrast: the level at `gamma = 1` is `a + c`.
+    /// Contrast: the level at `gamma = 1` is `a + c`; the mean over the
+    /// band when the levels vary.
     pub c: f64,
+    /// The levels along the curve when they vary (see
+    /// [`crate::fit::LevelModel`]); absent for the global pair.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub along: Vec<LevelSample>,
 }
 
 /// The measured B-spline and how closely it follows the samples.
@@ -125,13 +135,18 @@ impl<'a> ResultFile<'a> {
             config,
             outcome: m.outcome,
             polarity: polarity_text(config.kind, m.curve.is_closed(), c),
-            gray_levels: GrayLevels { a, c },
+            gray_levels: GrayLevels {
+                a,
+                c,
+                along: m.levels.clone(),
+            },
             curve: CurveRecord {
                 spline: m.curve_data(),
                 fit_error: m.curve_fit_error,
             },
             length: m.length(),
             area: m.area(),
+            derived: Derived::new(m),
             edge_spread: m.edge_spread,
             blur_corrected: m.blur_corrected,
             samples: m.samples.len(),

@@ -20,6 +20,7 @@
 //! concave parts of a star are handled).
 
 mod geometry;
+pub mod specimen;
 
 use std::f64::consts::PI;
 use std::path::Path;

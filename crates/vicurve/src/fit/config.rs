@@ -2,6 +2,7 @@
 //! result file records the configuration it was measured with.
 
 use crate::error::{Error, Result};
+use crate::fit::levels::LevelModel;
 use crate::interp::Interpolation;
 use crate::virtual_image::Kind;
 use serde::{Deserialize, Serialize};
@@ -177,6 +178,10 @@ pub struct FitConfig {
     /// Curvilinear coordinates of the band pixels. Default: exact
     /// projection.
     pub coords: Coords,
+    /// Whether the virtual image's gray levels may vary along the curve
+    /// (uneven light). Default: varying, elements of 128 px (see
+    /// [`LevelModel`]).
+    pub levels: LevelModel,
 }
 
 impl Default for FitConfig {
@@ -194,6 +199,7 @@ impl Default for FitConfig {
             sample_spacing: 1.0,
             blur_correction: true,
             coords: Coords::Exact,
+            levels: LevelModel::default(),
         }
     }
 }
@@ -201,6 +207,7 @@ impl Default for FitConfig {
 impl FitConfig {
     /// Check every field; errors name the field and the accepted range.
     pub fn validate(&self) -> Result<()> {
+        self.levels.validate()?;
         if !(1..=crate::spline::MAX_DEGREE).contains(&self.degree) {
             return Err(Error::invalid(
                 "degree",

@@ -44,8 +44,11 @@
 //! No allocation happens in `iterate`: the per-thread accumulators are made
 //! once in `new`.
 
+mod varying;
+
 use crate::band::Band;
 use crate::error::{Error, Result};
+use crate::fit::levels::{self, LevelModel};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::{BandCholesky, SymBandMatrix};
@@ -134,11 +137,17 @@ pub(crate) struct Correlation {
     /// Pure-noise variance of the gray levels, once estimated
     /// ([`Correlation::estimate_noise`]).
     pub noise_var: Option<f64>,
+    /// Gray levels that vary along the curve ([`LevelModel::Varying`]);
+    /// `None`: the global pair.
+    varying: Option<Box<varying::Varying>>,
 }
 
 impl Correlation {
-    /// Assemble and factorise `M0` and the constant vectors for `band`.
-    pub fn new(band: Band, basis: Basis) -> Result<Self> {
+    /// Assemble and factorise `M0` and the constant vectors for `band`,
+    /// with gray levels as `levels` asks (the global pair when the curve is
+    /// too short for varying ones, or they cannot be told apart from the
+    /// displacement).
+    pub fn new(band: Band, basis: Basis, levels: LevelModel) -> Result<Self> {
         let n = basis.n_functions();
         let p = basis.degree();
         if band.len() < 2 * n + 2 {
@@ -207,7 +216,12 @@ impl Correlation {
             })
             .collect();
         let band_len = band.len();
+        let varying = levels
+            .basis(basis.length(), basis.is_closed())
+            .and_then(|lb| varying::Varying::new(&band, &basis, &chol, lb).ok())
+            .map(Box::new);
         Ok(Correlation {
+            varying,
             count,
             pixels: band.len() as f64,
             y1,
@@ -232,10 +246,15 @@ impl Correlation {
     /// The system for `band`, comparing as its profile requires: the
     /// pixel-edge profile is pushed (module docs), the paper's profiles pull
     /// the image back.
-    pub fn prepare(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
+    pub fn prepare(
+        band: Band,
+        basis: Basis,
+        sampler: &Sampler,
+        levels: LevelModel,
+    ) -> Result<Self> {
         match band.profile() {
-            Profile::PixelEdge { .. } => Correlation::new_pushed(band, basis, sampler),
-            Profile::Paper { .. } => Correlation::new(band, basis),
+            Profile::PixelEdge { .. } => Correlation::new_pushed(band, basis, sampler, levels),
+            Profile::Paper { .. } => Correlation::new(band, basis, levels),
         }
     }
 
@@ -244,7 +263,7 @@ impl Correlation {
     ///
     /// Errors: those of `new`, and [`Error::BandOutsideImage`] when a band
     /// pixel has no value.
-    fn new_pushed(band: Band, basis: Basis, sampler: &Sampler) -> Result<Self> {
+    fn new_pushed(band: Band, basis: Basis, sampler: &Sampler, levels: LevelModel) -> Result<Self> {
         let values = band
             .pos
             .iter()
@@ -256,7 +275,7 @@ impl Correlation {
                 })
             })
             .collect::<Result<Vec<f64>>>()?;
-        let mut corr = Correlation::new(band, basis)?;
+        let mut corr = Correlation::new(band, basis, levels)?;
         corr.pushed = Some(values);
         Ok(corr)
     }
@@ -274,6 +293,9 @@ impl Correlation {
         sampler: &Sampler,
         polarity: Polarity,
     ) -> std::result::Result<Step, StepFailure> {
+        if self.varying.is_some() {
+            return self.iterate_varying(lambda, sampler, polarity);
+        }
         let band = &self.band;
         let basis = &self.basis;
         let p = basis.degree();
@@ -438,15 +460,47 @@ impl Correlation {
 
     /// Pushed profile only (else `None`): the weighted residual sum of
     /// squares at `lambda` of the virtual image with `profile` in place of
-    /// the band's, the gray levels refitted (linear least squares), over
-    /// every `stride`-th band pixel. For choosing a profile parameter (the
-    /// blur) at a fixed curve.
+    /// the band's, the gray levels refitted (linear least squares, with the
+    /// band's level model), over every `stride`-th band pixel. For choosing
+    /// a profile parameter (the blur) at a fixed curve.
     pub fn pushed_ssr(&self, lambda: &[f64], profile: Profile, stride: usize) -> Option<f64> {
         let values = self.pushed.as_deref()?;
         let band = &self.band;
-        let basis = &self.basis;
-        let p = basis.degree();
         let half_width = band.half_width();
+        let gamma_at = |i: usize| {
+            let u = self.displacement_at(i, lambda);
+            profile
+                .eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i])
+                .0
+        };
+        if let Some(var) = &self.varying {
+            // Dense normal equations of the levels (allocates: called a few
+            // dozen times per blur fit, not per iteration).
+            let lb = &var.levels;
+            let dim = lb.dim();
+            let mut mat = vec![0.0; dim * dim];
+            let mut rhs = vec![0.0; dim];
+            let mut sff = 0.0;
+            for i in (0..values.len()).step_by(stride.max(1)) {
+                let (w, f) = (band.weight[i], values[i]);
+                lb.accumulate(
+                    i,
+                    w,
+                    levels::features(gamma_at(i)),
+                    f,
+                    Some(&mut mat),
+                    &mut rhs,
+                );
+                sff += w * f * f;
+            }
+            let b = rhs.clone();
+            if !levels::cholesky_in_place(&mut mat, dim) {
+                return None;
+            }
+            levels::cholesky_solve(&mat, dim, &mut rhs);
+            let fit: f64 = b.iter().zip(&rhs).map(|(u, v)| u * v).sum();
+            return Some((sff - fit).max(0.0));
+        }
         let zero = [0.0; 6];
         let sums = (0..values.len())
             .into_par_iter()
@@ -454,14 +508,7 @@ impl Correlation {
             .fold(
                 || zero,
                 |mut acc, i| {
-                    let first = band.first[i] as usize;
-                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-                    let mut u = 0.0;
-                    for (k, v) in vals.iter().enumerate() {
-                        u += lambda[basis.index(first, k)] * v;
-                    }
-                    let (g, _) =
-                        profile.eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i]);
+                    let g = gamma_at(i);
                     let (w, f) = (band.weight[i], values[i]);
                     for (a, v) in
                         acc.iter_mut()
@@ -489,25 +536,80 @@ impl Correlation {
         Some((sff - a * sf - c * sfg).max(0.0))
     }
 
-    /// The residual `g - f` of band pixel `i` at `lambda` with gray levels
-    /// `a`, `c` (`None` when the displaced pixel leaves the image).
-    pub fn residual(
-        &self,
-        i: usize,
-        lambda: &[f64],
-        sampler: &Sampler,
-        a: f64,
-        c: f64,
-    ) -> Option<f64> {
-        let band = &self.band;
+    /// `U` at band pixel `i` for `lambda`.
+    fn displacement_at(&self, i: usize, lambda: &[f64]) -> f64 {
         let p = self.basis.degree();
-        let first = band.first[i] as usize;
-        let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-        let u: f64 = vals
+        let first = self.band.first[i] as usize;
+        self.band.basis[i * (p + 1)..(i + 1) * (p + 1)]
             .iter()
             .enumerate()
             .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
-            .sum();
+            .sum()
+    }
+
+    /// The gray levels `(a, c)` of the last iteration at band pixel `i`
+    /// (`None` before the first iteration).
+    fn levels_of_pixel(&self, i: usize) -> Option<(f64, f64)> {
+        match &self.varying {
+            Some(var) => self.levels.map(|_| var.levels.levels(i, &var.theta)),
+            None => self.levels,
+        }
+    }
+
+    /// The gray levels `(a, c)` of the last iteration at parameter `u` of
+    /// the reference (`None` before the first iteration).
+    pub fn levels_at(&self, u: f64) -> Option<(f64, f64)> {
+        match &self.varying {
+            Some(var) => self.levels.map(|_| var.levels_at(u)),
+            None => self.levels,
+        }
+    }
+
+    /// Whether the levels vary along the curve.
+    pub fn varying_levels(&self) -> bool {
+        self.varying.is_some()
+    }
+
+    /// After convergence at `lambda`: whether the varying levels explain
+    /// the band better than a global pair by more than noise would (always
+    /// `true` for the global pair). Varying levels fitted to even light
+    /// only take up noise, and cost precision through their coupling with
+    /// the displacement; the fit then drops them.
+    ///
+    /// The test: the drop of the residual sum of squares from the global
+    /// pair to the varying levels, against its distribution under even
+    /// light, `sigma^2 chi^2` with `dim - 2` degrees of freedom (`sigma^2`
+    /// the pure-noise variance, [`Self::estimate_noise`]): significant
+    /// beyond its mean plus 5 standard deviations.
+    pub fn levels_significant(&mut self, lambda: &[f64], sampler: &Sampler) -> bool {
+        let Some((dim, ssr_global)) = self
+            .varying
+            .as_ref()
+            .map(|v| (v.levels.dim(), v.ssr_global))
+        else {
+            return true;
+        };
+        let Some(noise) = self
+            .noise_var
+            .or_else(|| self.estimate_noise(lambda, sampler))
+        else {
+            return true;
+        };
+        // The sums are weighted (about one per pixel).
+        let sigma2 = noise * self.count / self.pixels;
+        let extra = (dim - 2) as f64;
+        let drop = ssr_global - self.ssr;
+        // NaN (no global fit recorded) keeps the levels.
+        drop.is_nan() || drop > sigma2 * (extra + 5.0 * (2.0 * extra).sqrt())
+    }
+
+    /// The residual `g - f` of band pixel `i` at `lambda` with the gray
+    /// levels of the last iteration (`None` before the first iteration or
+    /// when the displaced pixel leaves the image).
+    pub fn residual(&self, i: usize, lambda: &[f64], sampler: &Sampler) -> Option<f64> {
+        let band = &self.band;
+        let (a, c) = self.levels_of_pixel(i)?;
+        let u = self.displacement_at(i, lambda);
         let (f, gamma) = match &self.pushed {
             Some(values) => {
                 let (gamma, _) = band.profile().eval(
@@ -537,13 +639,7 @@ impl Correlation {
     /// residuals estimates the noise variance alone (Rice's difference
     /// estimator), on at most `NOISE_PIXELS` band pixels taken at a regular
     /// stride. Allocates: call it once per stage, not per iteration.
-    pub fn estimate_noise(
-        &mut self,
-        lambda: &[f64],
-        sampler: &Sampler,
-        a: f64,
-        c: f64,
-    ) -> Option<f64> {
+    pub fn estimate_noise(&mut self, lambda: &[f64], sampler: &Sampler) -> Option<f64> {
         let band = &self.band;
         // A regular subsample bounds the cost (the sort) on wide bands; the
         // variance of the estimate is then about 2 / NOISE_PIXELS relative.
@@ -554,7 +650,7 @@ impl Correlation {
             if self.robust[i] < 0.5 {
                 continue;
             }
-            if let Some(v) = self.residual(i, lambda, sampler, a, c) {
+            if let Some(v) = self.residual(i, lambda, sampler) {
                 res.push((band.r[i], v));
             }
         }
@@ -570,12 +666,16 @@ impl Correlation {
 
     /// Standard deviation of the normal position `U(s)` at `s`, pixels:
     /// `var U = N^T Cov(Lambda) N` with `Cov(Lambda) = sigma^2 / c^2
-    /// (M0 - B S^-1 B^T)^-1` (the gray levels estimated jointly) and
-    /// `sigma^2` the noise variance per pixel (method, section 8): the
-    /// pure-noise estimate when [`Self::estimate_noise`] has run, else the
-    /// residual variance (an upper bound: it includes profile mismatch).
-    /// `scratch` has one entry per unknown.
-    pub fn position_sigma(&self, s: f64, c: f64, scratch: &mut [f64]) -> f64 {
+    /// (M0 - B S^-1 B^T)^-1` (the gray levels estimated jointly; `c` the
+    /// contrast at `s`) and `sigma^2` the noise variance per pixel (method,
+    /// section 8): the pure-noise estimate when [`Self::estimate_noise`] has
+    /// run, else the residual variance (an upper bound: it includes profile
+    /// mismatch). `scratch` has one entry per unknown. NaN before the first
+    /// iteration.
+    pub fn position_sigma(&self, s: f64, scratch: &mut [f64]) -> f64 {
+        let Some((_, c)) = self.levels_at(s) else {
+            return f64::NAN;
+        };
         let sigma2 = self.noise_var.unwrap_or_else(|| {
             // ssr is weighted; scale it back to a per-pixel variance.
             let dof = (self.pixels - self.n_unknowns() as f64 - 2.0).max(1.0);
@@ -585,14 +685,19 @@ impl Correlation {
         let first = self.basis.eval(s, &mut v);
         let vals = &v[..=self.basis.degree()];
         let mut q = self.chol.inverse_quadratic_form(first, vals, scratch);
-        let (mut n1, mut n2) = (0.0, 0.0);
-        for (k, vk) in vals.iter().enumerate() {
-            let i = self.basis.index(first, k);
-            n1 += vk * self.y1[i];
-            n2 += vk * self.y2[i];
+        match &self.varying {
+            Some(var) => q += var.variance_term(&self.basis, first, vals),
+            None => {
+                let (mut n1, mut n2) = (0.0, 0.0);
+                for (k, vk) in vals.iter().enumerate() {
+                    let i = self.basis.index(first, k);
+                    n1 += vk * self.y1[i];
+                    n2 += vk * self.y2[i];
+                }
+                q += n1 * (self.k_inv[0] * n1 + self.k_inv[1] * n2)
+                    + n2 * (self.k_inv[2] * n1 + self.k_inv[3] * n2);
+            }
         }
-        q += n1 * (self.k_inv[0] * n1 + self.k_inv[1] * n2)
-            + n2 * (self.k_inv[2] * n1 + self.k_inv[3] * n2);
         (sigma2 * q / (c * c)).max(0.0).sqrt()
     }
 }

@@ -19,10 +19,12 @@
 
 mod config;
 mod correlation;
+pub mod levels;
 mod result;
 
 pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
-pub use result::{Divergence, Measurement, Outcome, Sample, StageReport};
+pub use levels::LevelModel;
+pub use result::{Divergence, LevelSample, Measurement, Outcome, Sample, StageReport};
 
 use crate::band::Band;
 use crate::curve::{InitialCurve, SplineCurve};
@@ -64,6 +66,8 @@ const MAX_REREFERENCES: usize = 100;
 const SETTLE_TOLERANCE: f64 = 2e-3;
 /// Settling re-references of the last stage, at most.
 const MAX_SETTLES: usize = 4;
+/// Spacing of [`Measurement::levels`] along the curve, pixels.
+const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
 const BLUR_FIT_PIXELS: usize = 8192;
 /// Runs of the pixel-edge stage with an updated blur, at most.
@@ -112,6 +116,9 @@ pub fn measure_from(
             "the sampler was prepared for another interpolation than the configuration's",
         ));
     }
+    // The level model may be downgraded to the global pair on the way (see
+    // `Correlation::levels_significant`).
+    let mut config = config.clone();
     let closed = reference.is_closed();
     let (width, height) = (sampler.width(), sampler.height());
     let (mut stages, auto) = match &config.stages {
@@ -234,7 +241,7 @@ pub fn measure_from(
                 Err(e) => return Err(e),
             };
             let band_pixels = band.len();
-            let mut corr = match Correlation::prepare(band, basis.clone(), sampler) {
+            let mut corr = match Correlation::prepare(band, basis.clone(), sampler, config.levels) {
                 Ok(c) => c,
                 Err(e) if first_band => return Err(e),
                 Err(e) if appended => {
@@ -270,7 +277,7 @@ pub fn measure_from(
                 &mut corr,
                 &mut lambda,
                 sampler,
-                config,
+                &config,
                 r,
                 budget,
                 reref_limit,
@@ -310,6 +317,36 @@ pub fn measure_from(
                 }
                 Some(o) => {
                     outcome = o;
+                    // Varying levels that explain no more than noise would
+                    // are dropped (they cost precision): this stage runs
+                    // once more with the global pair, and so do the next.
+                    if o == Outcome::Converged
+                        && corr.varying_levels()
+                        && !corr.levels_significant(&lambda, sampler)
+                    {
+                        config.levels = LevelModel::Global;
+                        let band = corr.band.clone();
+                        if let Ok(mut global) =
+                            Correlation::prepare(band, basis.clone(), sampler, config.levels)
+                        {
+                            let mut global_lambda = lambda.clone();
+                            let mut global_step = None;
+                            let (end, used) = iterate_to_end(
+                                &mut global,
+                                &mut global_lambda,
+                                sampler,
+                                &config,
+                                r,
+                                config.max_iterations,
+                                f64::INFINITY,
+                                &mut global_step,
+                            );
+                            iterations += used;
+                            if let (Run::Converged, Some(_)) = (end, global_step) {
+                                (corr, lambda, step) = (global, global_lambda, global_step);
+                            }
+                        }
+                    }
                     let auto_elements = matches!(stage.elements, Elements::Auto { .. });
                     if let (Elements::Auto { shortest, .. }, Some(s), None) =
                         (stage.elements, step, fixed_elements)
@@ -321,7 +358,7 @@ pub fn measure_from(
                             s,
                             shortest,
                             sampler,
-                            config,
+                            &config,
                             (r, profile),
                         )?;
                         (corr, lambda, step) = (refined.0, refined.1, Some(refined.2));
@@ -332,7 +369,7 @@ pub fn measure_from(
                     }
                     if o == Outcome::Converged {
                         iterations +=
-                            robust_refit(&mut corr, &mut lambda, &mut step, sampler, config, r);
+                            robust_refit(&mut corr, &mut lambda, &mut step, sampler, &config, r);
                     }
                     // The pixel edge's blur is fitted on the converged
                     // curve; a change means one more run with it.
@@ -374,8 +411,8 @@ pub fn measure_from(
                         rereferences += 1;
                         continue;
                     }
-                    if let (None, Some(s)) = (corr.noise_var, step) {
-                        corr.estimate_noise(&lambda, sampler, s.a, s.c);
+                    if let (None, Some(_)) = (corr.noise_var, step) {
+                        corr.estimate_noise(&lambda, sampler);
                     }
                     let spacing = reference_spacing(&corr.basis);
                     let next = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
@@ -394,7 +431,6 @@ pub fn measure_from(
                         half_width: r,
                         profile,
                         reference: std::mem::replace(&mut current, next),
-                        c: step.map_or(1.0, |s| s.c),
                         corr,
                         lambda,
                     });
@@ -457,6 +493,7 @@ pub fn measure_from(
                 curve: current,
                 stages: reports,
                 skipped,
+                levels: Vec::new(),
             });
         }
     };
@@ -471,7 +508,8 @@ pub fn measure_from(
         .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
         .filter(|e| matched_band(e) <= BAND_MISMATCH * fin.half_width)
         .map(|e| e.sigma);
-    let (curve, curve_fit_error, samples) = fin.samples(config.sample_spacing, p.max(3), blur)?;
+    let (curve, curve_fit_error, samples, levels) =
+        fin.samples(config.sample_spacing, p.max(3), blur)?;
     Ok(Measurement {
         outcome,
         curve,
@@ -481,6 +519,7 @@ pub fn measure_from(
         skipped,
         edge_spread,
         blur_corrected: blur.is_some() || pixel_edge_result,
+        levels,
     })
 }
 
@@ -580,7 +619,7 @@ fn refine(
     let params = reference.sample_params((length.ceil() as usize).max(8));
     let mut iterations = 0;
     let mut previous_diff2 = f64::INFINITY;
-    corr.estimate_noise(&lambda, sampler, step.a, step.c);
+    corr.estimate_noise(&lambda, sampler);
     loop {
         let h = corr.basis.element_length() / 2.0;
         if h < shortest {
@@ -604,7 +643,7 @@ fn refine(
         ) else {
             break;
         };
-        let Ok(mut fine) = Correlation::prepare(band, basis, sampler) else {
+        let Ok(mut fine) = Correlation::prepare(band, basis, sampler, config.levels) else {
             break;
         };
         let mut fine_lambda = vec![0.0; fine.n_unknowns()];
@@ -623,7 +662,7 @@ fn refine(
         let (Run::Converged, Some(fs)) = (end, fine_step) else {
             break;
         };
-        fine.estimate_noise(&fine_lambda, sampler, fs.a, fs.c);
+        fine.estimate_noise(&fine_lambda, sampler);
         let mut scratch_c = vec![0.0; corr.n_unknowns()];
         let mut scratch_f = vec![0.0; fine.n_unknowns()];
         let (mut diff2, mut noise2) = (0.0, 0.0);
@@ -631,8 +670,8 @@ fn refine(
             let d =
                 displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
             diff2 += d * d;
-            let sf = fine.position_sigma(u, fs.c, &mut scratch_f);
-            let sc = corr.position_sigma(u, step.c, &mut scratch_c);
+            let sf = fine.position_sigma(u, &mut scratch_f);
+            let sc = corr.position_sigma(u, &mut scratch_c);
             noise2 += sf * sf - sc * sc;
         }
         // Significant, and still converging like a shape error (a change
@@ -687,7 +726,7 @@ fn robust_refit(
     for _ in 0..ROBUST_ROUNDS {
         let Some(s) = *step else { break };
         // A pixel displaced out of the image counts as fitting exactly.
-        let residual = |i: usize| corr.residual(i, lambda, sampler, s.a, s.c).unwrap_or(0.0);
+        let residual = |i: usize| corr.residual(i, lambda, sampler).unwrap_or(0.0);
         // Detection on a regular subsample (a crossing wire still leaves
         // several of its pixels in it); all residuals only when needed.
         let stride = corr.band.len().div_ceil(ROBUST_PROBE_PIXELS).max(1);
@@ -719,7 +758,8 @@ fn robust_refit(
         for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
             *w = b * k;
         }
-        let Ok(mut next) = Correlation::prepare(band, corr.basis.clone(), sampler) else {
+        let Ok(mut next) = Correlation::prepare(band, corr.basis.clone(), sampler, config.levels)
+        else {
             break;
         };
         next.robust = robust;
@@ -879,20 +919,19 @@ struct Final {
     reference: SplineCurve,
     corr: Correlation,
     lambda: Vec<f64>,
-    c: f64,
 }
 
 impl Final {
     /// Dense samples of `x0 + U n` (moved by the blur's curvature shift
     /// when `blur` is given, see [`crate::psf`]), the B-spline fitted to
     /// them and its largest deviation from them, and the output samples with
-    /// `sigma`.
+    /// `sigma`, and the gray levels along the curve when they vary.
     fn samples(
         &self,
         spacing: f64,
         degree: usize,
         blur: Option<f64>,
-    ) -> Result<(SplineCurve, f64, Vec<Sample>)> {
+    ) -> Result<(SplineCurve, f64, Vec<Sample>, Vec<LevelSample>)> {
         let fine_step = (0.25f64).min(spacing);
         let l = self.reference.param_length();
         let closed = self.reference.is_closed();
@@ -942,7 +981,16 @@ impl Final {
         let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
         let mut fit_error: f64 = 0.0;
         let mut out = Vec::with_capacity(pts.len() / every + 2);
+        let mut levels = Vec::new();
+        let mut next_level = 0.0;
         for (i, q) in pts.iter().enumerate() {
+            let last = !closed && i + 1 == pts.len();
+            if self.corr.varying_levels() && (s[i] >= next_level || last) {
+                if let Some((a, c)) = self.corr.levels_at(params[i]) {
+                    levels.push(LevelSample { s: s[i], a, c });
+                }
+                next_level = s[i] + LEVEL_SAMPLE_SPACING;
+            }
             let on_curve = curve.point(s[i]);
             fit_error = fit_error.max(crate::curve::dist(on_curve, *q));
             let keep = i % every == 0 || (!closed && i + 1 == pts.len());
@@ -954,12 +1002,12 @@ impl Final {
                     y: q[1],
                     nx: f.normal[0],
                     ny: f.normal[1],
-                    sigma: self.corr.position_sigma(params[i], self.c, &mut scratch),
+                    sigma: self.corr.position_sigma(params[i], &mut scratch),
                     weight: weight_at(params[i]),
                 });
             }
         }
-        Ok((curve, fit_error, out))
+        Ok((curve, fit_error, out, levels))
     }
 }
 

@@ -149,6 +149,21 @@ pub struct Measurement {
     /// Whether the samples and curve were moved by the blur's curvature
     /// shift (the edge spread was estimated and fitted well enough).
     pub blur_corrected: bool,
+    /// The virtual image's gray levels along the measured curve, every
+    /// 8 px or so, when they vary ([`crate::fit::LevelModel::Varying`]);
+    /// empty for the global pair (see the last stage's `a` and `c`).
+    pub levels: Vec<LevelSample>,
+}
+
+/// The virtual image's gray levels at one place of the measured curve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LevelSample {
+    /// Arc length on the measured curve (as [`Sample::s`]), pixels.
+    pub s: f64,
+    /// Dark level `a` (outside, or the line's ground), gray levels.
+    pub a: f64,
+    /// Contrast `c`: the level at `gamma = 1` is `a + c`.
+    pub c: f64,
 }
 
 impl Measurement {

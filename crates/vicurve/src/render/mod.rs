@@ -19,6 +19,7 @@ pub mod noise;
 pub mod presets;
 pub mod profile;
 pub mod shapes;
+pub mod specimen;
 
 use serde::{Deserialize, Serialize};
 

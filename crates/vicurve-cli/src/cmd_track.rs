@@ -1,0 +1,129 @@
+//! `vicurve track`: one curve through a sequence of images, each frame
+//! started from the previous frame's result (see [`crate::sequence`]).
+
+use crate::job::{self, CurveFile, Job, JobOutputs};
+use crate::Failure;
+use std::path::{Path, PathBuf};
+
+/// Track a curve through a sequence of images.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The frames: a glob pattern (quote it: `'frames/*.tif'`), sorted by
+    /// name, or several files in order.
+    #[arg(required = true)]
+    pub images: Vec<String>,
+    /// Starting curve of the first frame, as for `measure`:
+    /// `circle:CX,CY,R`, `segment:X0,Y0,X1,Y1` or `polyline:FILE.csv`.
+    #[arg(long)]
+    pub init: String,
+    /// Treat a `polyline:` start as closed.
+    #[arg(long)]
+    pub closed: bool,
+    /// `silhouette` or `contour`.
+    #[arg(long, default_value = "silhouette")]
+    pub kind: String,
+    /// Force the polarity (as for `measure`), or `auto`.
+    #[arg(long, default_value = "auto")]
+    pub polarity: String,
+    /// Stages of the first frame (as for `measure`; default: the default
+    /// schedule).
+    #[arg(long)]
+    pub stages: Option<String>,
+    /// Stages of the frames started from the previous result: `default`
+    /// (the full default schedule, the default: its last, pixel-edge stage
+    /// is what makes the result exact, and the schedule cannot yet end with
+    /// it otherwise) or `R:N,...` (faster, less accurate: see
+    /// docs/benchmarks.md).
+    #[arg(long)]
+    pub track_stages: Option<String>,
+    /// Degree of the B-splines (1 to 5).
+    #[arg(long, default_value_t = 3)]
+    pub degree: usize,
+    /// Image interpolation: `cubic`, `bilinear` or `keys`.
+    #[arg(long)]
+    pub interp: Option<String>,
+    /// Convergence tolerance, pixels.
+    #[arg(long, default_value_t = 1e-4)]
+    pub tolerance: f64,
+    /// Iteration limit per stage.
+    #[arg(long, default_value_t = 200)]
+    pub max_iter: usize,
+    /// No blur estimate nor pixel-edge stage (as for `measure`).
+    #[arg(long)]
+    pub no_blur_correction: bool,
+    /// Start every frame from `--init` instead of the previous result.
+    #[arg(long)]
+    pub no_tracking: bool,
+    /// Output folder: per-frame JSON and points CSV named after the frame's
+    /// file stem, `summary.csv`, `job.json`.
+    #[arg(long)]
+    pub out_dir: PathBuf,
+    /// Also write an overlay per frame: `png` or `svg`.
+    #[arg(long)]
+    pub overlay: Option<String>,
+    /// Do not write the per-frame points CSV.
+    #[arg(long)]
+    pub no_points: bool,
+    /// Measure every frame again, even those already done in the output
+    /// folder (by default a re-run skips them).
+    #[arg(long)]
+    pub force: bool,
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let job = build(&args)?;
+    crate::sequence::run(&job, args.force)
+}
+
+/// The job `track`'s flags describe.
+pub fn build(args: &Args) -> Result<Job, Failure> {
+    let images = if args.images.len() == 1 && has_wildcard(&args.images[0]) {
+        job::expand_glob(&args.images[0])?
+    } else {
+        let list: Vec<PathBuf> = args.images.iter().map(PathBuf::from).collect();
+        if let Some(p) = list.iter().find(|p| has_wildcard(&p.display().to_string())) {
+            return Err(Failure::Error(format!(
+                "'{}': give one quoted pattern, or a list of files",
+                p.display()
+            )));
+        }
+        list
+    };
+    let curve = CurveFile {
+        name: Some("curve".into()),
+        init: args.init.clone(),
+        kind: Some(args.kind.clone()),
+        closed: args.closed,
+        polarity: Some(args.polarity.clone()),
+        stages: args.stages.clone(),
+        track_stages: args.track_stages.clone(),
+        degree: Some(args.degree),
+        interp: args.interp.clone(),
+        tolerance: Some(args.tolerance),
+        max_iter: Some(args.max_iter),
+        no_blur_correction: args.no_blur_correction,
+    };
+    let spec = job::curve_spec(&curve, 0, Path::new(""))?;
+    let overlay = match args.overlay.as_deref() {
+        None | Some("none") => None,
+        Some(o) => Some(job::parse_overlay(o)?),
+    };
+    let job = Job {
+        images,
+        out_dir: args.out_dir.clone(),
+        track: !args.no_tracking,
+        curves: vec![spec],
+        widths: Vec::new(),
+        outputs: JobOutputs {
+            points: !args.no_points,
+            overlay,
+            plots: false,
+        },
+    };
+    job::check(&job)?;
+    Ok(job)
+}
+
+fn has_wildcard(s: &str) -> bool {
+    s.contains(['*', '?', '['])
+}

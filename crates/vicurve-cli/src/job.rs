@@ -1,0 +1,473 @@
+//! Job files: a sequence of images, the curves to measure on each, the
+//! widths to derive between them and the outputs, in TOML; `vicurve run
+//! job.toml`.
+//!
+//! ```toml
+//! images = "frames/*.png"      # a glob, or a list ["a.png", "b.png"];
+//!                              # relative to the job file's folder
+//! out_dir = "results"          # per-frame files, summary.csv, plots
+//! track = true                 # start each frame from the previous result
+//!
+//! [[curve]]
+//! name = "top"                 # names the files when there are several curves
+//! init = "segment:10,50,390,50"  # as `measure --init` (polyline: files are
+//!                              # relative to the job file's folder)
+//! kind = "silhouette"          # or "contour"
+//! # closed, polarity, stages, track_stages, degree, interp, tolerance,
+//! # max_iter, no_blur_correction: as the flags of `vicurve measure`/`track`
+//!
+//! [[curve]]
+//! name = "bottom"
+//! init = "segment:10,150,390,150"
+//!
+//! [[width]]
+//! name = "section"             # default "width"
+//! between = ["top", "bottom"]
+//! axis = "x"                   # "x", "y", "estimate" or [x0, y0, dx, dy]
+//! step = 1.0                   # px between the profile's positions
+//!
+//! [outputs]
+//! points = true                # per-frame points CSV (default true)
+//! overlay = "png"              # "png", "svg" or "none" (default)
+//! plots = true                 # width plots (default true)
+//! ```
+//!
+//! Unknown keys are errors (a misspelt option is not silently ignored).
+
+use crate::cmd_measure::{parse_init, parse_interp, parse_polarity};
+use crate::Failure;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use vicurve::curve::InitialCurve;
+use vicurve::fit::{parse_stages, FitConfig};
+use vicurve::virtual_image::Kind;
+
+/// Frames started from the previous frame's result use the first frame's
+/// stages unless a curve says otherwise (`track_stages`; `"default"` is the
+/// default schedule). A tracked start is already within a fraction of a
+/// pixel of the edge, so the coarse bands (20, 10, 5 px) have little to do
+/// (a few iterations each), but only the default schedule ends with the
+/// pixel-edge stage and the settled last stage that make a silhouette
+/// exact: with `2:auto` alone, frames are about 4 times faster and the
+/// width of the synthetic necking specimen is off by 0.02 to 0.14 px
+/// instead of under 0.01 (docs/benchmarks.md, "Sequences").
+/// The job file as written (TOML).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct JobFile {
+    images: Images,
+    out_dir: PathBuf,
+    #[serde(default = "yes")]
+    track: bool,
+    #[serde(default)]
+    curve: Vec<CurveFile>,
+    #[serde(default)]
+    width: Vec<WidthFile>,
+    #[serde(default)]
+    outputs: OutputsFile,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(untagged)]
+enum Images {
+    Glob(String),
+    List(Vec<String>),
+}
+
+/// One curve as written in a job file (also built from `track`'s flags).
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CurveFile {
+    pub name: Option<String>,
+    pub init: String,
+    pub kind: Option<String>,
+    #[serde(default)]
+    pub closed: bool,
+    pub polarity: Option<String>,
+    pub stages: Option<String>,
+    pub track_stages: Option<String>,
+    pub degree: Option<usize>,
+    pub interp: Option<String>,
+    pub tolerance: Option<f64>,
+    pub max_iter: Option<usize>,
+    #[serde(default)]
+    pub no_blur_correction: bool,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct WidthFile {
+    name: Option<String>,
+    between: [String; 2],
+    axis: Option<AxisFile>,
+    step: Option<f64>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(untagged)]
+enum AxisFile {
+    Named(String),
+    Explicit([f64; 4]),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct OutputsFile {
+    #[serde(default = "yes")]
+    points: bool,
+    overlay: Option<String>,
+    #[serde(default = "yes")]
+    plots: bool,
+}
+
+impl Default for OutputsFile {
+    fn default() -> Self {
+        OutputsFile {
+            points: true,
+            overlay: None,
+            plots: true,
+        }
+    }
+}
+
+/// A job ready to run: what `run` reads from a file and `track` builds
+/// from its flags.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The frames, in order.
+    pub images: Vec<PathBuf>,
+    pub out_dir: PathBuf,
+    /// Start each frame from the previous frame's result (else every frame
+    /// from the curves' `init`).
+    pub track: bool,
+    pub curves: Vec<CurveSpec>,
+    pub widths: Vec<WidthSpec>,
+    pub outputs: JobOutputs,
+}
+
+/// One curve to measure on every frame.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CurveSpec {
+    pub name: String,
+    /// The start of the first frame (and of frames after a failure with no
+    /// good curve before them).
+    pub init: InitialCurve,
+    /// Configuration of frames started from `init`.
+    pub first: FitConfig,
+    /// Configuration of frames started from the previous frame's result.
+    pub tracked: FitConfig,
+}
+
+/// How the axis of a width profile is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AxisChoice {
+    X,
+    Y,
+    /// Estimated on each frame from the two curves.
+    Estimate,
+    /// Origin and direction, px.
+    Explicit {
+        origin: [f64; 2],
+        direction: [f64; 2],
+    },
+}
+
+/// A width between two named curves.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct WidthSpec {
+    pub name: String,
+    /// Indices into `Job::curves`.
+    pub between: [usize; 2],
+    pub axis: AxisChoice,
+    pub step: f64,
+}
+
+/// Overlay format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OverlayKind {
+    Png,
+    Svg,
+}
+
+#[derive(Debug, Clone)]
+pub struct JobOutputs {
+    pub points: bool,
+    pub overlay: Option<OverlayKind>,
+    pub plots: bool,
+}
+
+/// Read and check a job file.
+pub fn load(path: &Path) -> Result<Job, Failure> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            format!("job file not found: {}", path.display())
+        } else {
+            format!("cannot read the job file {}: {e}", path.display())
+        }
+    })?;
+    let file: JobFile = toml::from_str(&text)
+        .map_err(|e| format!("job file {}: {}", path.display(), one_line(&e.to_string())))?;
+    let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let images = match &file.images {
+        Images::Glob(pattern) => expand_glob(&resolve(&base, pattern))?,
+        Images::List(list) => list.iter().map(|p| base.join(p)).collect(),
+    };
+    let curves = file
+        .curve
+        .iter()
+        .enumerate()
+        .map(|(i, c)| curve_spec(c, i, &base))
+        .collect::<Result<Vec<_>, _>>()?;
+    let widths = file
+        .width
+        .iter()
+        .map(|w| width_spec(w, &curves))
+        .collect::<Result<Vec<_>, _>>()?;
+    let overlay = match file.outputs.overlay.as_deref() {
+        None | Some("none") => None,
+        Some(o) => Some(parse_overlay(o)?),
+    };
+    let job = Job {
+        images,
+        out_dir: base.join(&file.out_dir),
+        track: file.track,
+        curves,
+        widths,
+        outputs: JobOutputs {
+            points: file.outputs.points,
+            overlay,
+            plots: file.outputs.plots,
+        },
+    };
+    check(&job)?;
+    Ok(job)
+}
+
+/// `png` or `svg`.
+pub fn parse_overlay(text: &str) -> Result<OverlayKind, Failure> {
+    match text {
+        "png" => Ok(OverlayKind::Png),
+        "svg" => Ok(OverlayKind::Svg),
+        _ => Err(Failure::Error(format!(
+            "unknown overlay '{text}' (expected png, svg or none)"
+        ))),
+    }
+}
+
+/// `dir/pattern` unless the pattern is absolute.
+fn resolve(base: &Path, pattern: &str) -> String {
+    if Path::new(pattern).is_absolute() || base.as_os_str().is_empty() {
+        pattern.to_string()
+    } else {
+        base.join(pattern).display().to_string()
+    }
+}
+
+/// The files matching a glob pattern, sorted by name (`*`, `?`, `[...]`;
+/// see the `glob` crate). No match is an error: a misspelt pattern should
+/// not look like an empty sequence.
+pub fn expand_glob(pattern: &str) -> Result<Vec<PathBuf>, Failure> {
+    let paths = glob::glob(pattern)
+        .map_err(|e| format!("bad image pattern '{pattern}': {e}"))?
+        .filter_map(|entry| entry.ok())
+        .filter(|p| p.is_file())
+        .collect::<Vec<_>>();
+    if paths.is_empty() {
+        return Err(Failure::Error(format!(
+            "no image matches '{pattern}' (quote the pattern so that the shell does not expand it)"
+        )));
+    }
+    let mut paths = paths;
+    paths.sort();
+    Ok(paths)
+}
+
+/// The two configurations of a curve.
+pub fn curve_spec(c: &CurveFile, index: usize, base: &Path) -> Result<CurveSpec, Failure> {
+    let name = c
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("curve{}", index + 1));
+    let context = |e: Failure| match e {
+        Failure::Error(m) | Failure::Diverged(m) => Failure::Error(format!("curve '{name}': {m}")),
+    };
+    let init_text = match c.init.strip_prefix("polyline:") {
+        Some(file) => format!("polyline:{}", resolve(base, file)),
+        None => c.init.clone(),
+    };
+    let init = parse_init(&init_text, c.closed).map_err(context)?;
+    let kind = match c.kind.as_deref() {
+        None | Some("silhouette") => Kind::Silhouette,
+        Some("contour") => Kind::Contour,
+        Some(k) => {
+            return Err(context(Failure::Error(format!(
+                "unknown kind '{k}' (expected silhouette or contour)"
+            ))))
+        }
+    };
+    let mut first = FitConfig {
+        kind,
+        polarity: parse_polarity(c.polarity.as_deref().unwrap_or("auto")).map_err(context)?,
+        degree: c.degree.unwrap_or(3),
+        tolerance: c.tolerance.unwrap_or(1e-4),
+        max_iterations: c.max_iter.unwrap_or(200),
+        blur_correction: !c.no_blur_correction,
+        ..FitConfig::default()
+    };
+    if let Some(i) = &c.interp {
+        first.interpolation = parse_interp(i).map_err(context)?;
+    }
+    if let Some(s) = &c.stages {
+        first.stages = Some(parse_stages(s).map_err(|e| context(e.into()))?);
+    }
+    let mut tracked = first.clone();
+    tracked.stages = match c.track_stages.as_deref() {
+        Some("default") => None,
+        Some(s) => Some(parse_stages(s).map_err(|e| context(e.into()))?),
+        None => first.stages.clone(),
+    };
+    first.validate().map_err(|e| context(e.into()))?;
+    tracked.validate().map_err(|e| context(e.into()))?;
+    Ok(CurveSpec {
+        name,
+        init,
+        first,
+        tracked,
+    })
+}
+
+fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure> {
+    let name = w.name.clone().unwrap_or_else(|| "width".into());
+    let find = |n: &str| {
+        curves.iter().position(|c| c.name == n).ok_or_else(|| {
+            Failure::Error(format!(
+                "width '{name}': no curve named '{n}' (the curves are: {})",
+                curves
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })
+    };
+    let between = [find(&w.between[0])?, find(&w.between[1])?];
+    if between[0] == between[1] {
+        return Err(Failure::Error(format!(
+            "width '{name}': the two curves must differ"
+        )));
+    }
+    for &i in &between {
+        if curves[i].init.is_closed() {
+            return Err(Failure::Error(format!(
+                "width '{name}': curve '{}' is closed; a width is measured between two open curves",
+                curves[i].name
+            )));
+        }
+    }
+    let axis = match &w.axis {
+        None => AxisChoice::Estimate,
+        Some(AxisFile::Named(a)) => match a.as_str() {
+            "x" => AxisChoice::X,
+            "y" => AxisChoice::Y,
+            "estimate" => AxisChoice::Estimate,
+            _ => {
+                return Err(Failure::Error(format!(
+                    "width '{name}': unknown axis '{a}' (expected \"x\", \"y\", \"estimate\" or [x0, y0, dx, dy])"
+                )))
+            }
+        },
+        Some(AxisFile::Explicit(v)) => {
+            if !v.iter().all(|x| x.is_finite()) || v[2].hypot(v[3]) == 0.0 {
+                return Err(Failure::Error(format!(
+                    "width '{name}': the axis [x0, y0, dx, dy] needs finite numbers and a non-zero direction"
+                )));
+            }
+            AxisChoice::Explicit {
+                origin: [v[0], v[1]],
+                direction: [v[2], v[3]],
+            }
+        }
+    };
+    let step = w.step.unwrap_or(1.0);
+    if !(step.is_finite() && step > 0.0) {
+        return Err(Failure::Error(format!(
+            "width '{name}': step {step} px (must be > 0)"
+        )));
+    }
+    Ok(WidthSpec {
+        name,
+        between,
+        axis,
+        step,
+    })
+}
+
+/// Names are unique, usable in file names, and frames have distinct stems
+/// that do not collide with the job's own files.
+pub fn check(job: &Job) -> Result<(), Failure> {
+    if job.curves.is_empty() {
+        return Err(Failure::Error(
+            "the job measures no curve: add a [[curve]] table with at least `init`".into(),
+        ));
+    }
+    if job.images.is_empty() {
+        return Err(Failure::Error("the job lists no image".into()));
+    }
+    let mut names: Vec<&str> = Vec::new();
+    for n in job
+        .curves
+        .iter()
+        .map(|c| c.name.as_str())
+        .chain(job.widths.iter().map(|w| w.name.as_str()))
+    {
+        let ok = !n.is_empty()
+            && n.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+        if !ok {
+            return Err(Failure::Error(format!(
+                "name '{n}': use letters, digits, '-' and '_' only (it names files)"
+            )));
+        }
+        if names.contains(&n) {
+            return Err(Failure::Error(format!(
+                "name '{n}' is used twice (curves and widths need distinct names)"
+            )));
+        }
+        names.push(n);
+    }
+    let mut stems: Vec<String> = Vec::new();
+    for p in &job.images {
+        let stem = frame_stem(p)?;
+        if stem == crate::sequence::SUMMARY_STEM || stem == crate::sequence::MANIFEST_STEM {
+            return Err(Failure::Error(format!(
+                "frame {}: the name '{stem}' is reserved for the job's own files; rename the image",
+                p.display()
+            )));
+        }
+        if stems.contains(&stem) {
+            return Err(Failure::Error(format!(
+                "two frames are named '{stem}' (results are named after the file stem): {}",
+                p.display()
+            )));
+        }
+        stems.push(stem);
+    }
+    Ok(())
+}
+
+/// A frame's file stem, which names its results.
+pub fn frame_stem(p: &Path) -> Result<String, Failure> {
+    p.file_stem()
+        .and_then(|s| s.to_str())
+        .map(str::to_string)
+        .ok_or_else(|| Failure::Error(format!("frame {}: no usable file name", p.display())))
+}
+
+fn one_line(msg: &str) -> String {
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
+}

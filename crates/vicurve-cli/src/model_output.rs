@@ -1,0 +1,143 @@
+//! `measure --model`: a parametric shape (circle, ellipse, line, polygon)
+//! fitted after the B-spline measurement that starts it, printed, written
+//! as the `model` object of the result file, and sampled for `--points`
+//! and the overlays.
+
+use crate::cmd_measure::{finish, print_summary, write_outputs, Outputs};
+use crate::output::{write_json, ResultFile};
+use crate::Failure;
+use serde::Serialize;
+use vicurve::curve::InitialCurve;
+use vicurve::fit::{FitConfig, Measurement, Outcome};
+use vicurve::model::{measure_model, ModelConfig, ModelFit, ModelProfile, ShapeModel};
+use vicurve::Image;
+
+/// A model whose residual RMS exceeds the B-spline curve's by this factor
+/// is reported as a likely misfit.
+const MISFIT: f64 = 2.0;
+
+/// The result file of a measurement with a model: the B-spline record as
+/// `measure --out` writes it (its `samples` count those of the model), then
+/// `model`.
+#[derive(Serialize)]
+struct WithModel<'a> {
+    #[serde(flatten)]
+    result: ResultFile<'a>,
+    model: &'a ModelFit,
+}
+
+/// Fit `model` on the measurement `m`, write the outputs (`--points`, the
+/// overlays: the fitted shape's samples; `--out`: the record with `model`)
+/// and print the parameters. Exit status: an error when the model cannot be
+/// fitted (1), a diverged B-spline or model fit (3).
+pub fn run(
+    model: ShapeModel,
+    outputs: &Outputs,
+    path_text: &str,
+    image: &Image,
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+) -> Result<(), Failure> {
+    let fit = measure_model(image, m, config, model, &ModelConfig::default())?;
+    let mut shown = m.clone();
+    shown.samples = fit.samples(config.sample_spacing)?;
+    let others = Outputs {
+        out: None,
+        points: outputs.points.clone(),
+        svg: outputs.svg.clone(),
+        png: outputs.png.clone(),
+        png_scale: outputs.png_scale,
+    };
+    let written = write_outputs(&others, path_text, image, init, config, &shown);
+    let json = match &outputs.out {
+        Some(p) => {
+            let size = (image.width(), image.height());
+            let record = WithModel {
+                result: ResultFile::new(path_text, size, init, config, &shown),
+                model: &fit,
+            };
+            write_json(p, &record).map_err(Failure::Error)
+        }
+        None => Ok(()),
+    };
+    let any = outputs.out.is_some()
+        || outputs.points.is_some()
+        || outputs.svg.is_some()
+        || outputs.png.is_some();
+    if !any {
+        print_summary(config, m);
+    }
+    print_model(&fit);
+    // A shape that does not describe the edge leaves much more residual
+    // than the free B-spline curve.
+    let curve_rms = m.residual_rms();
+    if fit.residual_rms > MISFIT * curve_rms {
+        eprintln!(
+            "vicurve: warning: the {model} leaves a residual {:.1} times the measured curve's ({:.2e} against {:.2e}): it may not describe this edge",
+            fit.residual_rms / curve_rms,
+            fit.residual_rms,
+            curve_rms
+        );
+    }
+    written?;
+    json?;
+    finish(m)?;
+    match fit.outcome {
+        Outcome::Converged => Ok(()),
+        Outcome::IterationLimit => {
+            eprintln!(
+                "vicurve: warning: the {model} fit reached its iteration limit before converging"
+            );
+            Ok(())
+        }
+        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
+            "the {model} fit diverged: {divergence}"
+        ))),
+    }
+}
+
+/// The model's parameters, one a line, then how it was fitted.
+fn print_model(fit: &ModelFit) {
+    println!(
+        "model:       {} ({}, {} iterations, {} band pixels)",
+        fit.model, fit.outcome, fit.iterations, fit.band_pixels
+    );
+    for p in &fit.parameters {
+        let degrees = if p.unit == "rad" {
+            format!(
+                " ({:.5} +- {:.5} deg)",
+                p.value.to_degrees(),
+                p.sigma.to_degrees()
+            )
+        } else {
+            String::new()
+        };
+        println!(
+            "  {:<9} = {:.6} +- {:.6} {}{degrees}",
+            p.name, p.value, p.sigma, p.unit
+        );
+    }
+    let profile = match fit.profile {
+        ModelProfile::PixelEdge { blur } if fit.exact_pixels == fit.band_pixels => {
+            format!("exact pixel coverage (sharp edge; fitted blur {blur:.3} px)")
+        }
+        ModelProfile::PixelEdge { blur } => format!("pixel edge through a blur of {blur:.3} px"),
+        ModelProfile::Paper {
+            kind, half_width, ..
+        } => {
+            format!("{kind} profile over +-{half_width} px")
+        }
+    };
+    println!("  profile:  {profile}");
+    if fit.excluded_pixels > 0 {
+        println!(
+            "  corners:  {} pixels near the vertices left out",
+            fit.excluded_pixels
+        );
+    }
+    println!(
+        "  residual: {:.3e} (RMS gray level); gray levels a = {:.4}, c = {:+.4}",
+        fit.residual_rms, fit.a, fit.c
+    );
+}

@@ -1,0 +1,182 @@
+//! What makes a sequence resumable: atomic writes, the job's fingerprint,
+//! and reading back the frames already done.
+//!
+//! A frame is *done* when the summary (`summary.csv`, always rewritten
+//! atomically, so a kill leaves the previous complete version) holds its
+//! rows and every curve's JSON exists and carries the fingerprint of the
+//! same job. Per-frame files are written to a temporary name and renamed,
+//! so a file that exists is complete. A frame whose files were written but
+//! whose rows had not reached the summary when the run was killed is
+//! measured again (identically).
+//!
+//! Tracking goes on from a done frame with the curve read back from its
+//! JSON. So that a resumed run gives exactly the same results as an
+//! uninterrupted one, an uninterrupted run also starts each frame from the
+//! previous curve *as written* ([`rebuild`] of its data): serde_json writes
+//! floats in their shortest round-tripping form, so both are the same
+//! numbers to the last bit.
+
+use crate::job::CurveSpec;
+use crate::job::WidthSpec;
+use serde::Serialize;
+use std::path::Path;
+use vicurve::curve::{SplineCurve, SplineCurveData};
+use vicurve::spline::Basis;
+
+/// Write `bytes` to `path` through a temporary file in the same folder and
+/// a rename: readers (and a later run) see the old file or the new one,
+/// never a part.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    std::fs::write(&tmp, bytes).map_err(fail)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e)
+    })
+}
+
+/// What defines the results of a job, and so its fingerprint: the
+/// curves (start and configurations), tracking and widths; not the list of
+/// images (frames can be added to a sequence and the run resumed) nor the
+/// optional outputs.
+#[derive(Serialize)]
+pub struct Manifest<'a> {
+    pub vicurve_version: &'static str,
+    pub track: bool,
+    pub curves: &'a [CurveSpec],
+    pub widths: &'a [WidthSpec],
+}
+
+impl Manifest<'_> {
+    /// The canonical JSON text.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// FNV-1a (64 bits) of [`Manifest::to_json`], in hex: stable across
+    /// runs and platforms (unlike the standard library's hasher).
+    pub fn fingerprint(&self) -> String {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in self.to_json().bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+}
+
+/// The B-spline described by `data` (as [`SplineCurve::to_data`] writes
+/// it: a closed curve's first `degree` control points repeated at the end).
+pub fn rebuild(data: &SplineCurveData) -> Result<SplineCurve, String> {
+    let p = data.degree;
+    let bad = |why: &str| format!("the recorded curve is not usable: {why}");
+    if data.knots.len() < 2 * p + 2 {
+        return Err(bad("too few knots"));
+    }
+    let n_el = data.knots.len() - 2 * p - 1;
+    // Knots are (i - p) h with h = L / n, so knot p + n is L to within an
+    // ulp or two: the length whose basis gives the recorded knots exactly
+    // is among its neighbours (the same L when the file was written from a
+    // basis; else the nearest, within 1e-12 relative).
+    let guess = data.knots[p + n_el];
+    if !(guess.is_finite() && guess > 0.0) {
+        return Err(bad("the knots do not span a positive length"));
+    }
+    let mut best: Option<(f64, Basis)> = None;
+    for k in -4i64..=4 {
+        let length = f64::from_bits((guess.to_bits() as i64 + k) as u64);
+        let basis = Basis::new(p, n_el, length, data.closed).map_err(|e| bad(&e.to_string()))?;
+        let err = basis
+            .knots()
+            .iter()
+            .zip(&data.knots)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if best.as_ref().is_none_or(|b| err < b.0) {
+            best = Some((err, basis));
+        }
+    }
+    let (err, basis) = best.ok_or_else(|| bad("no basis"))?;
+    if err > 1e-12 * guess {
+        return Err(bad("non-uniform knots"));
+    }
+    let mut ctrl = data.control_points.clone();
+    if data.closed {
+        ctrl.truncate(ctrl.len().saturating_sub(p));
+    }
+    SplineCurve::new(basis, ctrl).map_err(|e| bad(&e.to_string()))
+}
+
+/// A done frame's curve as its JSON records it.
+pub struct Recorded {
+    /// Whether the fit is good enough to go on from (converged or hit its
+    /// iteration limit).
+    pub good: bool,
+    /// The measured curve (as written).
+    pub curve: SplineCurve,
+}
+
+/// Read a curve's JSON written by this job (`fingerprint`) for the frame
+/// `input` (the path as the job gives it). `None` when it is missing,
+/// unreadable or from another job or frame: the frame is then measured
+/// again.
+pub fn read_recorded(path: &Path, fingerprint: &str, input: &str) -> Option<Recorded> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    if v["sequence"]["job"].as_str()? != fingerprint || v["input"]["path"].as_str()? != input {
+        return None;
+    }
+    let status = v["outcome"]["status"].as_str()?;
+    let data: SplineCurveData = serde_json::from_value(v["curve"].clone()).ok()?;
+    let curve = rebuild(&data).ok()?;
+    Some(Recorded {
+        good: status == "converged" || status == "iteration_limit",
+        curve,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vicurve::curve::InitialCurve;
+
+    #[test]
+    fn curves_survive_the_json_round_trip_exactly() {
+        for init in [
+            InitialCurve::Circle {
+                cx: 100.3,
+                cy: 80.1,
+                r: 37.7,
+            },
+            InitialCurve::Segment {
+                x0: 3.1,
+                y0: 7.0,
+                x1: 191.3,
+                y1: 40.2,
+            },
+        ] {
+            let c = init.to_curve().unwrap();
+            let text = serde_json::to_string(&c.to_data()).unwrap();
+            let back: SplineCurveData = serde_json::from_str(&text).unwrap();
+            let r = rebuild(&back).unwrap();
+            assert_eq!(r.to_data(), c.to_data());
+            assert_eq!(r, c);
+        }
+    }
+
+    #[test]
+    fn atomic_write_replaces_whole_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        write_atomic(&p, b"first").unwrap();
+        write_atomic(&p, b"second").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        // No temporary file is left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

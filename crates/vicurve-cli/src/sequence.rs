@@ -1,0 +1,293 @@
+//! Running a job over a sequence of frames: `vicurve run` and `vicurve
+//! track`.
+//!
+//! Frames are measured in order, each curve started from its last good
+//! result (see [`crate::frame`]), with a progress bar (frames per second
+//! and the time left) on a terminal and one log line per frame otherwise.
+//! After every frame the summary is rewritten atomically; a run that is
+//! killed loses at most the frame in progress, and running the same job
+//! again skips the frames done (see [`crate::resume`]) and goes on from the
+//! last good curves, with the same results as an uninterrupted run.
+//! `--force` measures every frame again.
+//!
+//! The outcome: every frame measured, `Ok`; some frames failed (an
+//! unreadable image, a fit that diverged or could not start), exit 3 with
+//! one line saying how many and the first reason (the others are measured
+//! and written, the summary says which failed and why); nothing measured at
+//! all, or the job cannot run, exit 1.
+
+use crate::frame::{measure_frame, FrameFiles, Tracking};
+use crate::job::{frame_stem, Job};
+use crate::resume::{read_recorded, write_atomic, Manifest};
+use crate::summary::{first_cell, header, split_csv, COLUMNS};
+use crate::Failure;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::collections::HashMap;
+use std::io::IsTerminal;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// `DIR/summary.csv`.
+pub const SUMMARY_STEM: &str = "summary";
+/// `DIR/job.json`: the job's manifest and fingerprint.
+pub const MANIFEST_STEM: &str = "job";
+
+/// A summary larger than this (bytes) is rewritten at most every
+/// [`SUMMARY_PERIOD`] rather than after every frame.
+const SUMMARY_SMALL: usize = 1 << 20;
+const SUMMARY_PERIOD: Duration = Duration::from_secs(1);
+
+/// Run `job`; `force` measures every frame again.
+pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
+    let dir = &job.out_dir;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", dir.display()))?;
+    remove_stale_temporaries(dir);
+    let manifest = Manifest {
+        vicurve_version: env!("CARGO_PKG_VERSION"),
+        track: job.track,
+        curves: &job.curves,
+        widths: &job.widths,
+    };
+    let fingerprint = manifest.fingerprint();
+    let manifest_path = dir.join(format!("{MANIFEST_STEM}.json"));
+    if !force {
+        if let Some(old) = read_fingerprint(&manifest_path) {
+            if old != fingerprint {
+                return Err(Failure::Error(format!(
+                    "{} holds the results of another job (different curves or settings); use --force to measure every frame again there, or another output folder",
+                    dir.display()
+                )));
+            }
+        }
+    }
+    let mut manifest_text = serde_json::to_value(&manifest).unwrap_or_default();
+    manifest_text["fingerprint"] = serde_json::Value::String(fingerprint.clone());
+    write_atomic(
+        &manifest_path,
+        (serde_json::to_string_pretty(&manifest_text).unwrap_or_default() + "\n").as_bytes(),
+    )?;
+
+    let summary_path = dir.join(format!("{SUMMARY_STEM}.csv"));
+    let mut old_rows = if force {
+        HashMap::new()
+    } else {
+        read_summary(&summary_path)
+    };
+    let rows_per_frame = job.curves.len() + job.widths.len();
+    let stems: Vec<String> = job
+        .images
+        .iter()
+        .map(|p| frame_stem(p))
+        .collect::<Result<_, _>>()?;
+    // Done: rows in the summary and every curve's JSON present (checked
+    // further when read back).
+    let done: Vec<bool> = stems
+        .iter()
+        .map(|stem| {
+            let files = FrameFiles::new(job, stem);
+            old_rows
+                .get(stem)
+                .is_some_and(|r| r.len() == rows_per_frame)
+                && job.curves.iter().all(|c| files.json(&c.name).is_file())
+        })
+        .collect();
+    let to_do = done.iter().filter(|d| !**d).count();
+
+    let bar = progress_bar(to_do as u64)?;
+    let log = |line: &str| {
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+    };
+    let mut tracking = Tracking::new(job);
+    let mut lines: Vec<Vec<String>> = vec![Vec::new(); stems.len()];
+    let mut skipped = 0;
+    let mut measured = 0;
+    let mut last_write = Instant::now();
+    let total = stems.len();
+    for (i, (path, stem)) in job.images.iter().zip(&stems).enumerate() {
+        let files = FrameFiles::new(job, stem);
+        if done[i] {
+            if let Some(good) = read_done(job, &fingerprint, path, &files) {
+                tracking.update(job, stem, &good);
+                lines[i] = old_rows.remove(stem).unwrap_or_default();
+                skipped += 1;
+                continue;
+            }
+            // Unreadable or from another job after all: measure it.
+            bar.inc_length(1);
+        }
+        let started = Instant::now();
+        let out = measure_frame(job, &fingerprint, i, path, &files, &tracking);
+        tracking.update(job, stem, &out.good);
+        lines[i] = out.rows.iter().map(|r| r.to_line()).collect();
+        measured += 1;
+        for p in &out.problems {
+            log(&format!("vicurve: warning: {p}"));
+        }
+        bar.inc(1);
+        if bar.is_hidden() {
+            eprintln!(
+                "vicurve: frame {}/{total} {stem}: {} in {:.0} ms",
+                i + 1,
+                if out.problems.is_empty() {
+                    "measured"
+                } else {
+                    "measured with problems"
+                },
+                started.elapsed().as_secs_f64() * 1e3
+            );
+        }
+        let size: usize = lines.iter().flatten().map(|l| l.len() + 1).sum();
+        if size < SUMMARY_SMALL || last_write.elapsed() >= SUMMARY_PERIOD {
+            write_summary(&summary_path, &lines)?;
+            last_write = Instant::now();
+        }
+    }
+    write_summary(&summary_path, &lines)?;
+    bar.finish_and_clear();
+    if skipped > 0 {
+        eprintln!(
+            "vicurve: {skipped} frame(s) already done, skipped (--force measures them again); {measured} measured"
+        );
+    }
+    if job.outputs.plots {
+        if let Err(e) = crate::plot_width::write_plots(job, &stems, &lines) {
+            eprintln!("vicurve: warning: {e}");
+        }
+    }
+    status(&lines, total, &summary_path)
+}
+
+/// Temporary files of [`write_atomic`] that a killed run left behind
+/// (`.NAME.tmp-PID`); files of runs still going (their process alive) are
+/// not told apart, so two runs must not share an output folder.
+fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') && name.contains(".tmp-") && e.path().is_file() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// The fingerprint recorded in a manifest, if it can be read.
+fn read_fingerprint(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v["fingerprint"].as_str().map(str::to_string)
+}
+
+/// The rows of an existing summary by frame, when its header is today's
+/// (else none: every frame is measured again).
+fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
+    let mut out: HashMap<String, Vec<String>> = HashMap::new();
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return out;
+    };
+    let mut it = text.lines();
+    if it.next() != Some(header().as_str()) {
+        return out;
+    }
+    for line in it.filter(|l| !l.is_empty()) {
+        out.entry(first_cell(line))
+            .or_default()
+            .push(line.to_string());
+    }
+    out
+}
+
+/// A done frame's curves as written, `None` if any JSON is unusable.
+fn read_done(
+    job: &Job,
+    fingerprint: &str,
+    path: &Path,
+    files: &FrameFiles,
+) -> Option<Vec<Option<vicurve::curve::SplineCurve>>> {
+    let input = path.display().to_string();
+    job.curves
+        .iter()
+        .map(|c| {
+            read_recorded(&files.json(&c.name), fingerprint, &input).map(|r| {
+                if r.good {
+                    Some(r.curve)
+                } else {
+                    None
+                }
+            })
+        })
+        .collect()
+}
+
+fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {
+    let mut text = header();
+    text.push('\n');
+    for l in lines.iter().flatten() {
+        text.push_str(l);
+        text.push('\n');
+    }
+    Ok(write_atomic(path, text.as_bytes())?)
+}
+
+fn progress_bar(len: u64) -> Result<ProgressBar, Failure> {
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    if !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} frames, {per_sec}, {elapsed} elapsed, ETA {eta}",
+        )
+        .map_err(|e| e.to_string())?,
+    );
+    Ok(bar)
+}
+
+/// Exit status from the summary's `outcome` column.
+fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> Result<(), Failure> {
+    let outcome = COLUMNS.iter().position(|c| *c == "outcome").unwrap_or(2);
+    let reason = COLUMNS.iter().position(|c| *c == "reason").unwrap_or(3);
+    let mut failed_frames = 0;
+    let mut good_rows = 0;
+    let mut first: Option<String> = None;
+    for frame in lines {
+        let mut failed = false;
+        for l in frame {
+            let cells = split_csv(l);
+            let o = cells.get(outcome).map(String::as_str).unwrap_or("");
+            if o == "failed" || o == "diverged" {
+                failed = true;
+                if first.is_none() {
+                    first = Some(format!(
+                        "{} {}: {}",
+                        cells.first().cloned().unwrap_or_default(),
+                        cells.get(1).cloned().unwrap_or_default(),
+                        cells.get(reason).cloned().unwrap_or_default()
+                    ));
+                }
+            } else {
+                good_rows += 1;
+            }
+        }
+        failed_frames += usize::from(failed);
+    }
+    match (failed_frames, good_rows) {
+        (0, _) => Ok(()),
+        (_, 0) => Err(Failure::Error(format!(
+            "no frame could be measured ({}); see {}",
+            first.unwrap_or_default(),
+            summary.display()
+        ))),
+        (n, _) => Err(Failure::Diverged(format!(
+            "{n} of {total} frames failed (first: {}); the others are measured, see {}",
+            first.unwrap_or_default(),
+            summary.display()
+        ))),
+    }
+}

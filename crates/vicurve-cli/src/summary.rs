@@ -1,0 +1,265 @@
+//! `summary.csv`: one row per curve and per width of every frame.
+//!
+//! The columns are a contract (tools read them by name): [`COLUMNS`].
+//! Curve rows fill the fit's columns and, for closed curves, the derived
+//! measures; width rows (the `curve` column holds the width's name) fill
+//! the `min_width` columns. Cells that do not apply are empty. Lengths are
+//! pixels, angles degrees (counterclockwise on screen from `+x`).
+
+use vicurve::derived::{ClosedMeasures, WidthSample};
+use vicurve::fit::{Measurement, Outcome};
+
+/// The header of `summary.csv`, in order.
+pub const COLUMNS: [&str; 34] = [
+    "frame",
+    "curve",
+    "outcome",
+    "reason",
+    "started_from",
+    "iterations",
+    "residual",
+    "length",
+    "area",
+    "centroid_x",
+    "centroid_y",
+    "equivalent_diameter",
+    "circle_cx",
+    "circle_cy",
+    "circle_r",
+    "circle_sigma_cx",
+    "circle_sigma_cy",
+    "circle_sigma_r",
+    "circle_rms",
+    "ellipse_cx",
+    "ellipse_cy",
+    "ellipse_a",
+    "ellipse_b",
+    "ellipse_angle_deg",
+    "ellipse_sigma_cx",
+    "ellipse_sigma_cy",
+    "ellipse_sigma_a",
+    "ellipse_sigma_b",
+    "ellipse_sigma_angle_deg",
+    "ellipse_rms",
+    "min_width",
+    "min_width_sigma",
+    "min_width_position",
+    "width_samples",
+];
+
+/// One row being filled.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    cells: Vec<String>,
+}
+
+impl Row {
+    /// A row for `frame` and `curve` (or width) with only those cells set.
+    pub fn new(frame: &str, curve: &str) -> Row {
+        let mut cells = vec![String::new(); COLUMNS.len()];
+        cells[0] = frame.to_string();
+        cells[1] = curve.to_string();
+        Row { cells }
+    }
+
+    fn set(&mut self, column: &str, value: String) {
+        if let Some(i) = COLUMNS.iter().position(|c| *c == column) {
+            self.cells[i] = value;
+        }
+    }
+
+    fn num(&mut self, column: &str, v: f64) {
+        self.set(
+            column,
+            if v.is_finite() {
+                format!("{v:.6}")
+            } else {
+                String::new()
+            },
+        );
+    }
+
+    fn sci(&mut self, column: &str, v: f64) {
+        self.set(
+            column,
+            if v.is_finite() {
+                format!("{v:.3e}")
+            } else {
+                String::new()
+            },
+        );
+    }
+
+    /// A failure: `outcome` is `failed` (nothing measured) or `diverged`.
+    pub fn failed(mut self, outcome: &str, reason: &str) -> Row {
+        self.set("outcome", outcome.into());
+        self.set("reason", reason.into());
+        self
+    }
+
+    /// A measured curve: fit columns, plus the derived measures of a
+    /// closed curve (an error computing them goes to `reason`).
+    pub fn curve(mut self, m: &Measurement, started_from: &str, note: &str) -> Row {
+        let (outcome, reason) = match m.outcome {
+            Outcome::Converged => ("converged", String::new()),
+            Outcome::IterationLimit => {
+                ("iteration_limit", "the iteration limit was reached".into())
+            }
+            Outcome::Diverged { divergence } => ("diverged", divergence.to_string()),
+        };
+        let reason = match (reason.is_empty(), note.is_empty()) {
+            (_, true) => reason,
+            (true, false) => note.to_string(),
+            (false, false) => format!("{reason}; {note}"),
+        };
+        self.set("outcome", outcome.into());
+        self.set("reason", reason);
+        self.set("started_from", started_from.into());
+        self.set("iterations", m.iterations().to_string());
+        self.sci("residual", m.residual_rms());
+        self.num("length", m.length());
+        if let Some(a) = m.area() {
+            self.num("area", a);
+        }
+        if m.curve.is_closed() {
+            match vicurve::derived::closed_measures(m) {
+                Ok(c) => self.closed(&c),
+                Err(e) => {
+                    let r = self.cells[3].clone();
+                    let sep = if r.is_empty() { "" } else { "; " };
+                    self.set("reason", format!("{r}{sep}no circle or ellipse: {e}"));
+                }
+            }
+        }
+        self
+    }
+
+    fn closed(&mut self, c: &ClosedMeasures) {
+        self.num("centroid_x", c.centroid[0]);
+        self.num("centroid_y", c.centroid[1]);
+        self.num("equivalent_diameter", c.equivalent_diameter);
+        let k = &c.circle;
+        self.num("circle_cx", k.cx);
+        self.num("circle_cy", k.cy);
+        self.num("circle_r", k.r);
+        self.sci("circle_sigma_cx", k.sigma_cx);
+        self.sci("circle_sigma_cy", k.sigma_cy);
+        self.sci("circle_sigma_r", k.sigma_r);
+        self.sci("circle_rms", k.rms);
+        let e = &c.ellipse;
+        self.num("ellipse_cx", e.cx);
+        self.num("ellipse_cy", e.cy);
+        self.num("ellipse_a", e.a);
+        self.num("ellipse_b", e.b);
+        self.num("ellipse_angle_deg", e.angle.to_degrees());
+        self.sci("ellipse_sigma_cx", e.sigma_cx);
+        self.sci("ellipse_sigma_cy", e.sigma_cy);
+        self.sci("ellipse_sigma_a", e.sigma_a);
+        self.sci("ellipse_sigma_b", e.sigma_b);
+        self.sci("ellipse_sigma_angle_deg", e.sigma_angle.to_degrees());
+        self.sci("ellipse_rms", e.rms);
+    }
+
+    /// A width profile: its minimum (width, uncertainty, position along
+    /// the axis) and how many sections it has.
+    pub fn width(mut self, min: Option<&WidthSample>, count: usize) -> Row {
+        self.set("outcome", "measured".into());
+        self.set("width_samples", count.to_string());
+        match min {
+            Some(s) => {
+                self.num("min_width", s.width);
+                self.sci("min_width_sigma", s.sigma);
+                self.num("min_width_position", s.position);
+            }
+            None => {
+                self.set("outcome", "failed".into());
+                self.set("reason", "the two curves have no section in common".into());
+            }
+        }
+        self
+    }
+
+    /// The row as a CSV line (no newline).
+    pub fn to_line(&self) -> String {
+        self.cells
+            .iter()
+            .map(|c| csv_cell(c))
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+}
+
+/// The header line (no newline).
+pub fn header() -> String {
+    COLUMNS.join(",")
+}
+
+/// Quote a cell when it holds a comma, a quote or a line break.
+fn csv_cell(text: &str) -> String {
+    let clean = text.replace(['\n', '\r'], " ");
+    if clean.contains([',', '"']) {
+        format!("\"{}\"", clean.replace('"', "\"\""))
+    } else {
+        clean
+    }
+}
+
+/// The first cell of a CSV line (quoted or not): the frame.
+pub fn first_cell(line: &str) -> String {
+    match line.strip_prefix('"') {
+        Some(rest) => {
+            let mut out = String::new();
+            let mut chars = rest.chars().peekable();
+            while let Some(c) = chars.next() {
+                if c == '"' {
+                    if chars.peek() == Some(&'"') {
+                        out.push('"');
+                        chars.next();
+                    } else {
+                        break;
+                    }
+                } else {
+                    out.push(c);
+                }
+            }
+            out
+        }
+        None => line.split(',').next().unwrap_or("").to_string(),
+    }
+}
+
+/// The cells of a CSV line written by [`crate::summary`].
+pub fn split_csv(line: &str) -> Vec<String> {
+    let mut cells = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => cells.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    cells.push(cur);
+    cells
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_are_quoted_when_needed() {
+        let r = Row::new("f,1", "top").failed("failed", "cannot decode \"x\", truncated");
+        let line = r.to_line();
+        assert!(line.starts_with("\"f,1\",top,failed,\"cannot decode \"\"x\"\", truncated\""));
+        assert_eq!(first_cell(&line), "f,1");
+        assert_eq!(line.matches(',').count(), COLUMNS.len() - 1 + 2);
+        assert_eq!(first_cell("frame_003,top,converged"), "frame_003");
+    }
+}

@@ -1,0 +1,178 @@
+//! Speed of tracking one contour of about 2000 px through 1-megapixel
+//! frames, as `vicurve track` does it: each frame decoded from its PNG,
+//! prepared for interpolation and measured from the previous frame's curve.
+//!
+//! ```sh
+//! cargo run --release -p vicurve --example track_speed -- [FRAMES] [STAGES...]
+//! ```
+//!
+//! The frames (1000x1000, 8-bit PNG, a five-lobed star of mean radius 318
+//! px and perimeter about 2030 px, moving 0.3 px and turning 0.2 degree per
+//! frame, blur 1, noise 1 %) are rendered once into the temporary folder.
+//! For each schedule (`default`, the default schedule that `track` uses, or
+//! `R:N,...` as `--stages`, optionally followed by `/bilinear` or `/keys`
+//! for another interpolation than the cubic B-spline; default list:
+//! `default default/bilinear 2:auto 2:40px 2:40px/bilinear`) the frames are
+//! tracked from the previous curve smoothed as `track` does it, and timed:
+//! decode, preparation (the cubic prefilter), the fit; frames per second
+//! with and without the decode, and the largest distance to the exact star
+//! over all samples of all frames. `TRACK_SPEED_VERBOSE=1` prints every
+//! frame's stages.
+
+use std::time::Instant;
+use vicurve::curve::{InitialCurve, SplineCurve};
+use vicurve::fit::{measure, measure_from, parse_stages, FitConfig};
+use vicurve::interp::Sampler;
+use vicurve::render::{render, Method, RenderSpec};
+use vicurve::truth::{evaluate, Kind, Shape};
+
+fn star(k: usize) -> Shape {
+    Shape::Star {
+        cx: 500.3 + 0.3 * k as f64,
+        cy: 499.6 - 0.1 * k as f64,
+        r0: 318.0,
+        amplitude: 0.05,
+        lobes: 5,
+        phase: (0.2 * k as f64).to_radians(),
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let verbose = std::env::var_os("TRACK_SPEED_VERBOSE").is_some();
+    let frames: usize = args.first().and_then(|a| a.parse().ok()).unwrap_or(40);
+    let schedules: Vec<String> = if args.len() > 1 {
+        args[1..].to_vec()
+    } else {
+        [
+            "default",
+            "default/bilinear",
+            "2:auto",
+            "2:40px",
+            "2:40px/bilinear",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let dir = std::env::temp_dir().join("vicurve-track-speed");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = |k: usize| dir.join(format!("frame_{k:04}.png"));
+    let t = Instant::now();
+    for k in 0..=frames {
+        if path(k).is_file() {
+            continue;
+        }
+        let spec = RenderSpec {
+            width: 1000,
+            height: 1000,
+            shape: star(k),
+            kind: Kind::Silhouette,
+            method: Method::Coverage,
+            foreground: 0.8,
+            background: 0.2,
+            blur_sigma: 1.0,
+            noise: 0.01,
+            seed: k as u64 + 1,
+            bits: Some(8),
+            ..RenderSpec::default()
+        };
+        let img = render(&spec).unwrap();
+        vicurve::io::save_image(&path(k), &img, 8).unwrap();
+    }
+    println!(
+        "{} frames of 1000x1000 in {} (made in {:.1} s), perimeter {:.0} px; {} threads",
+        frames + 1,
+        dir.display(),
+        t.elapsed().as_secs_f64(),
+        star(0).length(),
+        rayon::current_num_threads()
+    );
+    // Frame 0 from a circle, with the default schedule (not timed).
+    let first = vicurve::io::load_image(&path(0)).unwrap();
+    let init = InitialCurve::Circle {
+        cx: 500.0,
+        cy: 500.0,
+        r: 318.0,
+    };
+    let m0 = measure(&first, &init, &FitConfig::default()).unwrap();
+    println!("frame 0: {}, {} iterations", m0.outcome, m0.iterations());
+    println!(
+        "| schedule | decode ms | prepare ms | fit ms | iterations | frames/s without decode | frames/s with decode | max error px |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for sched in &schedules {
+        let mut config = FitConfig::default();
+        let (sched_text, interp) = match sched.split_once('/') {
+            Some((a, b)) => (a, Some(b)),
+            None => (sched.as_str(), None),
+        };
+        if sched_text != "default" {
+            config.stages = Some(parse_stages(sched_text).unwrap());
+        }
+        if let Some(i) = interp {
+            config.interpolation = i.parse().unwrap();
+        }
+        let (mut decode, mut prepare, mut fit) = (0.0, 0.0, 0.0);
+        let mut iterations = 0;
+        let mut worst: f64 = 0.0;
+        let mut curve = m0.curve.clone();
+        for k in 1..=frames {
+            let t = Instant::now();
+            let img = vicurve::io::load_image(&path(k)).unwrap();
+            decode += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let sampler = Sampler::new(&img, config.interpolation);
+            prepare += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            // The start as `vicurve track` makes it: the previous curve
+            // refitted with control points 10 px apart.
+            let n = (curve.param_length() / 0.5).ceil() as usize;
+            let pts: Vec<[f64; 2]> = curve
+                .sample_params(n)
+                .into_iter()
+                .map(|u| curve.point(u))
+                .collect();
+            let spacing = (curve.param_length() / 16.0).clamp(2.0, 10.0);
+            let start = SplineCurve::fit(&pts, true, 3, spacing).unwrap();
+            let m = measure_from(&sampler, start, &config).unwrap();
+            fit += t.elapsed().as_secs_f64();
+            iterations += m.iterations();
+            let e = evaluate(&m.points(), &star(k)).unwrap();
+            worst = worst.max(e.max_abs);
+            if verbose {
+                let stages: Vec<String> = m
+                    .stages
+                    .iter()
+                    .map(|s| {
+                        format!(
+                            "R {} x {} el: {} it, {:.1} ms",
+                            s.half_width,
+                            s.elements,
+                            s.iterations,
+                            s.seconds * 1e3
+                        )
+                    })
+                    .collect();
+                println!(
+                    "  {sched} frame {k}: max error {:.4} px; {}",
+                    e.max_abs,
+                    stages.join("; ")
+                );
+            }
+            assert!(m.outcome.is_converged(), "frame {k}: {}", m.outcome);
+            curve = m.curve;
+        }
+        let n = frames as f64;
+        println!(
+            "| `{sched}` | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.4} |",
+            1e3 * decode / n,
+            1e3 * prepare / n,
+            1e3 * fit / n,
+            iterations as f64 / n,
+            n / (prepare + fit),
+            n / (decode + prepare + fit),
+            worst
+        );
+    }
+}

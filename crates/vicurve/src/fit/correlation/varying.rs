@@ -1,0 +1,449 @@
+//! The iteration with gray levels that vary along the curve; see
+//! [`crate::fit::levels`] for the model and the one approximation.
+//!
+//! Two passes over the band per iteration: the first samples `f` (or
+//! evaluates the pushed profile), keeps `f` and `gamma` per pixel and
+//! accumulates the levels' normal equations; the levels are solved; the
+//! second forms the residual with them and accumulates the displacement's
+//! right-hand side and the contrast averaged over each function's support.
+//! Nothing is allocated per iteration.
+
+use super::{Correlation, Step, StepFailure, MAX_OUTSIDE};
+use crate::band::Band;
+use crate::error::{Error, Result};
+use crate::fit::levels::{cholesky_in_place, cholesky_solve, features, LevelBasis, FEATURES};
+use crate::fit::Polarity;
+use crate::interp::Sampler;
+use crate::solver::BandCholesky;
+use crate::spline::Basis;
+use rayon::prelude::*;
+
+/// Partial sums of one chunk of band pixels.
+#[derive(Clone, Debug)]
+struct Chunk {
+    /// Levels' right-hand side, `dim`.
+    rhs_t: Vec<f64>,
+    /// Levels' normal matrix, `dim^2` (pushed profile only).
+    mat_t: Vec<f64>,
+    /// Displacement right-hand side `sum w c r dg N_i`, `n`.
+    rhs_l: Vec<f64>,
+    /// `sum w dg^2 N_i c(s)`, `n`.
+    dnum: Vec<f64>,
+    /// `w, w f, w gamma, w gamma^2, w f gamma, w f^2, w r^2, w a, w c`.
+    sums: [f64; 9],
+    outside: Option<[f64; 2]>,
+    outside_count: usize,
+}
+
+/// The varying levels' state of a [`Correlation`].
+#[derive(Clone, Debug)]
+pub(crate) struct Varying {
+    pub levels: LevelBasis,
+    /// The levels' coefficients of the last iteration.
+    pub theta: Vec<f64>,
+    have_theta: bool,
+    /// `B`, column-major, one column of `n` per coefficient: `sum w dg N_i
+    /// M_k phi` for each feature `phi` (at `U = 0`).
+    b: Vec<f64>,
+    /// `M0^-1 B`, same layout.
+    y: Vec<f64>,
+    /// Factor of `K = S - B^T M0^-1 B`, dense `dim x dim`.
+    k_factor: Vec<f64>,
+    /// Factor of the levels' normal matrix `S` at `U = 0` (pulled image).
+    s_factor: Vec<f64>,
+    /// `sum w dg^2 N_i` (the row sums of `M0`).
+    dden: Vec<f64>,
+    /// Residual sum of squares of the best global pair at the last
+    /// iteration's displacement.
+    pub ssr_global: f64,
+    /// Per band pixel: `f` and `gamma` of the current iteration.
+    fbuf: Vec<f64>,
+    gbuf: Vec<f64>,
+    per: usize,
+    chunks: Vec<Chunk>,
+    /// Scratch: `dim`, `dim^2`, `n`.
+    t: Vec<f64>,
+    mat: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl Varying {
+    /// Build the constant parts for `band` and the displacement's factor.
+    ///
+    /// Errors: [`Error::NotPositiveDefinite`] when the levels cannot be told
+    /// apart from the displacement (an element of the levels without band
+    /// pixels, say).
+    pub fn new(band: &Band, basis: &Basis, chol: &BandCholesky, lb: Basis) -> Result<Varying> {
+        let levels = LevelBasis::new(lb, &band.s);
+        let n = basis.n_functions();
+        let p = basis.degree();
+        let m = levels.m();
+        let dim = levels.dim();
+        let mut b = vec![0.0; n * dim];
+        let mut s_mat = vec![0.0; dim * dim];
+        let mut dden = vec![0.0; n];
+        let mut tmp = vec![0.0; dim];
+        let width = levels.width();
+        for i in 0..band.len() {
+            let w = band.weight[i];
+            let (g, dg) = (band.gamma[i], band.dgamma[i]);
+            let feats = features(g);
+            levels.accumulate(i, w, feats, 0.0, Some(&mut s_mat), &mut tmp);
+            let first = band.first[i] as usize;
+            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+            let lfirst = levels.first[i] as usize;
+            let lvals = &levels.vals[i * width..(i + 1) * width];
+            for (a, va) in vals.iter().enumerate() {
+                let ia = basis.index(first, a);
+                dden[ia] += w * dg * dg * va;
+                for (k, vk) in lvals.iter().enumerate() {
+                    let j = levels.basis.index(lfirst, k);
+                    let x = w * dg * va * vk;
+                    for (f, phi) in feats.iter().enumerate() {
+                        b[(f * m + j) * n + ia] += x * phi;
+                    }
+                }
+            }
+        }
+        let mut y = b.clone();
+        for col in y.chunks_mut(n) {
+            chol.solve_in_place(col);
+        }
+        let mut k = s_mat.clone();
+        for r in 0..dim {
+            for c in 0..dim {
+                let dot: f64 = b[r * n..(r + 1) * n]
+                    .iter()
+                    .zip(&y[c * n..(c + 1) * n])
+                    .map(|(u, v)| u * v)
+                    .sum();
+                k[r * dim + c] -= dot;
+            }
+        }
+        if !cholesky_in_place(&mut k, dim) || !cholesky_in_place(&mut s_mat, dim) {
+            return Err(Error::NotPositiveDefinite { index: n });
+        }
+        let chunks = (rayon::current_num_threads() * 2).clamp(1, 64);
+        let per = band.len().div_ceil(chunks).max(1);
+        let count = band.len().div_ceil(per);
+        let chunk = Chunk {
+            rhs_t: vec![0.0; dim],
+            mat_t: vec![0.0; dim * dim],
+            rhs_l: vec![0.0; n],
+            dnum: vec![0.0; n],
+            sums: [0.0; 9],
+            outside: None,
+            outside_count: 0,
+        };
+        Ok(Varying {
+            levels,
+            theta: vec![0.0; dim],
+            have_theta: false,
+            ssr_global: f64::NAN,
+            b,
+            y,
+            k_factor: k,
+            s_factor: s_mat,
+            dden,
+            fbuf: vec![0.0; band.len()],
+            gbuf: vec![0.0; band.len()],
+            per,
+            chunks: vec![chunk; count],
+            t: vec![0.0; dim],
+            mat: vec![0.0; dim * dim],
+            d: vec![0.0; n],
+        })
+    }
+
+    /// The levels' coefficients for constant levels `(a, c)` (the basis is
+    /// a partition of unity).
+    fn set_constant(&mut self, a: f64, c: f64) {
+        let m = self.levels.m();
+        self.theta[..m].fill(a);
+        self.theta[m..2 * m].fill(c);
+    }
+
+    /// `q(s)` term of the levels in the variance of `U(s)`: `(Y^T N)^T
+    /// K^-1 (Y^T N)` for the displacement functions `vals` from `first`.
+    pub fn variance_term(&self, basis: &Basis, first: usize, vals: &[f64]) -> f64 {
+        let n = basis.n_functions();
+        let dim = self.levels.dim();
+        let mut t = [0.0; MAX_DIM];
+        let mut z = [0.0; MAX_DIM];
+        for (col, tc) in t[..dim].iter_mut().enumerate() {
+            *tc = vals
+                .iter()
+                .enumerate()
+                .map(|(k, v)| v * self.y[col * n + basis.index(first, k)])
+                .sum();
+        }
+        z[..dim].copy_from_slice(&t[..dim]);
+        cholesky_solve(&self.k_factor, dim, &mut z[..dim]);
+        t[..dim].iter().zip(&z[..dim]).map(|(a, b)| a * b).sum()
+    }
+
+    /// `(a, c)` at parameter `u` of the reference, from the last iteration.
+    pub fn levels_at(&self, u: f64) -> (f64, f64) {
+        self.levels.levels_at(u, &self.theta)
+    }
+}
+
+/// Most level coefficients.
+const MAX_DIM: usize =
+    FEATURES * (crate::fit::levels::MAX_LEVEL_ELEMENTS + crate::spline::MAX_DEGREE);
+
+impl Correlation {
+    /// [`Correlation::iterate`] with varying levels.
+    pub(super) fn iterate_varying(
+        &mut self,
+        lambda: &[f64],
+        sampler: &Sampler,
+        polarity: Polarity,
+    ) -> std::result::Result<Step, StepFailure> {
+        let Some(var) = self.varying.as_deref_mut() else {
+            return Err(StepFailure::NonFinite);
+        };
+        let band = &self.band;
+        let basis = &self.basis;
+        let p = basis.degree();
+        let pushed = self.pushed.as_deref();
+        let (half_width, profile) = (band.half_width(), band.profile());
+        let lb = &var.levels;
+        let theta = &var.theta;
+        let have_theta = var.have_theta;
+        let per = var.per;
+        // Pass 1: f and gamma at the current displacement; the levels'
+        // normal equations.
+        var.chunks
+            .par_iter_mut()
+            .zip(var.fbuf.par_chunks_mut(per))
+            .zip(var.gbuf.par_chunks_mut(per))
+            .enumerate()
+            .for_each(|(k, ((acc, fb), gb))| {
+                acc.rhs_t.fill(0.0);
+                if pushed.is_some() {
+                    acc.mat_t.fill(0.0);
+                }
+                acc.sums = [0.0; 9];
+                acc.outside = None;
+                acc.outside_count = 0;
+                let start = k * per;
+                for (j, (fo, go)) in fb.iter_mut().zip(gb.iter_mut()).enumerate() {
+                    let i = start + j;
+                    let first = band.first[i] as usize;
+                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                    let mut u = 0.0;
+                    for (k, v) in vals.iter().enumerate() {
+                        u += lambda[basis.index(first, k)] * v;
+                    }
+                    let (f, gamma) = match pushed {
+                        Some(values) => {
+                            let (gamma, _) = profile.eval(
+                                band.r[i] - u,
+                                half_width,
+                                band.normal[i],
+                                band.curvature[i],
+                            );
+                            (values[i], gamma)
+                        }
+                        None => {
+                            let [x, y] = band.pos[i];
+                            let [nx, ny] = band.normal[i];
+                            let (xd, yd) = (x + u * nx, y + u * ny);
+                            let gamma = band.gamma[i];
+                            match sampler.value(xd, yd) {
+                                Some(f) => (f, gamma),
+                                None if have_theta => {
+                                    acc.outside.get_or_insert([xd, yd]);
+                                    acc.outside_count += 1;
+                                    let (a, c) = lb.levels(i, theta);
+                                    (a + c * gamma, gamma)
+                                }
+                                None => {
+                                    acc.outside = Some([xd, yd]);
+                                    acc.outside_count = usize::MAX / 1024;
+                                    return;
+                                }
+                            }
+                        }
+                    };
+                    *fo = f;
+                    *go = gamma;
+                    let w = band.weight[i];
+                    let mat = pushed.is_some().then_some(&mut acc.mat_t[..]);
+                    lb.accumulate(i, w, features(gamma), f, mat, &mut acc.rhs_t);
+                    let s = &mut acc.sums;
+                    s[0] += w;
+                    s[1] += w * f;
+                    s[2] += w * gamma;
+                    s[3] += w * gamma * gamma;
+                    s[4] += w * f * gamma;
+                    s[5] += w * f * f;
+                }
+            });
+        let outside: usize = var.chunks.iter().map(|a| a.outside_count).sum();
+        if outside > MAX_OUTSIDE.max(band.len() / 50) {
+            let q = var
+                .chunks
+                .iter()
+                .find_map(|a| a.outside)
+                .unwrap_or([f64::NAN; 2]);
+            return Err(StepFailure::LeftImage(q));
+        }
+        let dim = var.theta.len();
+        let mut sums = [0.0; 9];
+        var.t.fill(0.0);
+        if pushed.is_some() {
+            var.mat.fill(0.0);
+        }
+        for acc in &var.chunks {
+            for (s, v) in sums.iter_mut().zip(acc.sums) {
+                *s += v;
+            }
+            for (t, v) in var.t.iter_mut().zip(&acc.rhs_t) {
+                *t += v;
+            }
+            if pushed.is_some() {
+                for (t, v) in var.mat.iter_mut().zip(&acc.mat_t) {
+                    *t += v;
+                }
+            }
+        }
+        // The global pair, for the polarity and contrast checks.
+        let [n, sf, sg, sgg, sfg, sff, ..] = sums;
+        let det = n * sgg - sg * sg;
+        let a_global = (sgg * sf - sg * sfg) / det;
+        let c_global = (n * sfg - sg * sf) / det;
+        let var_f = (sff / n - (sf / n).powi(2)).max(0.0);
+        if !(a_global.is_finite() && c_global.is_finite()) {
+            return Err(StepFailure::NonFinite);
+        }
+        var.ssr_global = (sff - a_global * sf - c_global * sfg).max(0.0);
+        let spread = var_f.sqrt();
+        let sign = match polarity {
+            Polarity::Auto => 0.0,
+            Polarity::Positive => 1.0,
+            Polarity::Negative => -1.0,
+        };
+        if sign * c_global < 0.0 || (sign != 0.0 && c_global == 0.0) {
+            // As with the global pair: the forced polarity disagrees with
+            // the band, the curve is still far from the edge.
+            let c = sign * 2.0 * spread;
+            var.set_constant(sf / n - c * sg / n, c);
+        } else {
+            if c_global.abs() <= 1e-9 || c_global.abs() < 1e-6 * spread {
+                return Err(StepFailure::NoContrast);
+            }
+            let solved = match pushed {
+                Some(_) => cholesky_in_place(&mut var.mat, dim),
+                None => {
+                    var.mat.copy_from_slice(&var.s_factor);
+                    true
+                }
+            };
+            if solved {
+                cholesky_solve(&var.mat, dim, &mut var.t);
+                var.theta.copy_from_slice(&var.t);
+            } else {
+                var.set_constant(a_global, c_global);
+            }
+        }
+        var.have_theta = true;
+        // Pass 2: residuals with the levels; the displacement's right-hand
+        // side and the support-averaged contrast.
+        let lb = &var.levels;
+        let theta = &var.theta;
+        let (fbuf, gbuf) = (&var.fbuf, &var.gbuf);
+        var.chunks.par_iter_mut().enumerate().for_each(|(k, acc)| {
+            acc.rhs_l.fill(0.0);
+            acc.dnum.fill(0.0);
+            let mut s = [0.0; 3];
+            let start = k * per;
+            let end = (start + per).min(band.len());
+            for i in start..end {
+                let first = band.first[i] as usize;
+                let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                let (a, c) = lb.levels(i, theta);
+                let w = band.weight[i];
+                let dg = band.dgamma[i];
+                let r = a + c * gbuf[i] - fbuf[i];
+                let x = w * c * r * dg;
+                let y = w * dg * dg * c;
+                for (k, v) in vals.iter().enumerate() {
+                    let j = basis.index(first, k);
+                    acc.rhs_l[j] += x * v;
+                    acc.dnum[j] += y * v;
+                }
+                s[0] += w * r * r;
+                s[1] += w * a;
+                s[2] += w * c;
+            }
+            acc.sums[6] = s[0];
+            acc.sums[7] = s[1];
+            acc.sums[8] = s[2];
+        });
+        let rhs = &mut self.delta;
+        rhs.fill(0.0);
+        var.d.fill(0.0);
+        let (mut ssr, mut sa, mut sc) = (0.0, 0.0, 0.0);
+        for acc in &var.chunks {
+            for (r, v) in rhs.iter_mut().zip(&acc.rhs_l) {
+                *r += v;
+            }
+            for (d, v) in var.d.iter_mut().zip(&acc.dnum) {
+                *d += v;
+            }
+            ssr += acc.sums[6];
+            sa += acc.sums[7];
+            sc += acc.sums[8];
+        }
+        let (a_mean, c_mean) = (sa / n, sc / n);
+        // D_i: the contrast averaged over the support of N_i, kept away
+        // from zero (and on the mean's side) where the band sees little.
+        let floor = 0.25 * c_mean.abs();
+        for (d, den) in var.d.iter_mut().zip(&var.dden) {
+            let v = if *den > 0.0 { *d / den } else { c_mean };
+            *d = if v * c_mean.signum() < floor {
+                floor * c_mean.signum()
+            } else {
+                v
+            };
+        }
+        for (r, d) in rhs.iter_mut().zip(&var.d) {
+            *r /= d;
+        }
+        self.chol.solve_in_place(rhs);
+        // Woodbury: z += Y K^-1 B^T z.
+        let nn = rhs.len();
+        for (col, t) in var.t.iter_mut().enumerate() {
+            *t = var.b[col * nn..(col + 1) * nn]
+                .iter()
+                .zip(rhs.iter())
+                .map(|(b, z)| b * z)
+                .sum();
+        }
+        cholesky_solve(&var.k_factor, dim, &mut var.t);
+        let mut max_step: f64 = 0.0;
+        for (i, (r, d)) in rhs.iter_mut().zip(&var.d).enumerate() {
+            let corr: f64 = var
+                .t
+                .iter()
+                .enumerate()
+                .map(|(col, t)| var.y[col * nn + i] * t)
+                .sum();
+            *r = (*r + corr) / d;
+            max_step = max_step.max(r.abs());
+        }
+        if !max_step.is_finite() {
+            return Err(StepFailure::NonFinite);
+        }
+        self.ssr = ssr;
+        self.levels = Some((a_mean, c_mean));
+        Ok(Step {
+            a: a_mean,
+            c: c_mean,
+            residual_rms: (ssr / n).sqrt(),
+            max_step,
+        })
+    }
+}

@@ -1,0 +1,502 @@
+//! Levenberg–Marquardt over the shape parameters and the gray levels.
+//!
+//! The residual of band pixel `q` (centre, value `f` as recorded) is
+//! `e = f - a - c gamma(q; theta)`, with `gamma` the virtual image's
+//! profile of the pixel's signed distance `d(q; theta)` to the shape (the
+//! pixel-edge profile for silhouettes, the paper's profile otherwise), or,
+//! in a sharp image, the pixel's exact coverage by the shape. The virtual
+//! image is
+//! evaluated at the pixel centres (pushed, as the B-spline engine's last
+//! stage): no interpolation of the image. The unknowns are
+//! `z = (theta, a, c)`; the Jacobian is exact in `a` and `c` and uses
+//! `dgamma/dd . dd/dtheta` for the shape (the dependence of the pixel-edge
+//! profile's normal and curvature on `theta` is left out: second order).
+//!
+//! Each iteration solves `(J^T J + mu diag(J^T J)) dz = -J^T e` (dense
+//! Cholesky; a few to ~200 unknowns), accepts the step when the sum of
+//! squares does not rise, and lowers or raises `mu` accordingly; it stops
+//! when the largest parameter step, in pixels (angles times a length), is
+//! under the tolerance. Steps are capped at [`MAX_STEP`] px.
+//!
+//! The band is chosen at the current shape and kept fixed while the
+//! iterations run (the model is defined everywhere, so the sum of squares
+//! is a smooth function on a fixed set of pixels); then it is chosen again
+//! on the result, and the fit repeated until the set no longer changes.
+//! The first pass uses a band [`COARSE_EXTRA`] px wider, to pull in a start
+//! that is off by a fraction of a pixel (a polygon's vertices from the
+//! rounded corners of the measured curve). For the pixel-edge profile the
+//! blur is fitted between passes (golden section on the sum of squares,
+//! the shape and gray levels refitted for each blur tried; see
+//! `fit_blur`).
+//!
+//! The covariance of `z` is `s^2 (J^T J)^-1` at the solution, `s^2` the
+//! residual variance `sum e^2 / (n - m)` (`n` pixels, `m` unknowns): the
+//! Gauss–Newton covariance for independent pixel noise.
+
+use super::geometry::{Geometry, Grad, Local, PixelCtx, MAX_GRAD};
+use super::pixels::{select, BandPixel};
+use super::{CoverageModel, ModelConfig, ModelProfile};
+use crate::fit::{Divergence, Outcome};
+use crate::solver::DenseCholesky;
+use crate::virtual_image::Profile;
+use std::f64::consts::FRAC_1_SQRT_2;
+
+/// Largest parameter step of one iteration, pixels.
+const MAX_STEP: f64 = 1.0;
+/// The first pass's band is this much wider, pixels.
+const COARSE_EXTRA: f64 = 1.5;
+/// Tolerance of the first pass, pixels.
+const COARSE_TOLERANCE: f64 = 1e-3;
+/// Band selections (passes) at most.
+const MAX_PASSES: usize = 8;
+/// A fitted blur that differs by more than this (px) is worth another pass.
+const BLUR_TOLERANCE: f64 = 0.01;
+/// Blur updates at most.
+const MAX_BLUR_UPDATES: usize = 3;
+/// `CoverageModel::Auto` models the pixels by their exact coverage up to
+/// this blur, px.
+const EXACT_BLUR: f64 = 0.1;
+/// Blur deviations a pixel's footprint reaches.
+const BLUR_REACH: f64 = 3.5;
+/// Tolerance (px) and iterations of the refits of the blur's search.
+const BLUR_FIT_TOLERANCE: f64 = 1e-5;
+const BLUR_FIT_ITERATIONS: usize = 6;
+/// Damping bounds.
+const MU_START: f64 = 1e-6;
+const MU_MAX: f64 = 1e10;
+
+/// `(gamma, dgamma/dd)` of the profile at signed distance `d`.
+fn profile_at(profile: ModelProfile, d: f64, normal: [f64; 2], curvature: f64) -> (f64, f64) {
+    match profile {
+        ModelProfile::PixelEdge { blur } => {
+            Profile::PixelEdge { blur }.eval(d, 1.0, normal, curvature)
+        }
+        ModelProfile::Paper {
+            kind,
+            half_width,
+            blur_variance,
+        } => Profile::Paper { kind }.eval(
+            d - 0.5 * blur_variance * curvature,
+            half_width,
+            normal,
+            0.0,
+        ),
+    }
+}
+
+/// `gamma` and `dgamma/dtheta` of a pixel; `None` when it is left out.
+fn pixel_model(
+    geom: &Geometry,
+    q: [f64; 2],
+    profile: ModelProfile,
+    corners: PixelCtx,
+) -> Option<(f64, Grad, bool)> {
+    match geom.local(q, corners) {
+        Local::Edge {
+            d,
+            normal,
+            curvature,
+            grad,
+        } => {
+            let (v, dv) = profile_at(profile, d, normal, curvature);
+            let mut g = Grad::new();
+            for (i, gi) in grad.iter() {
+                g.add(i, dv * gi);
+            }
+            Some((v, g, false))
+        }
+        Local::Coverage { value, grad, .. } => Some((value, grad, true)),
+        Local::Excluded { .. } => None,
+    }
+}
+
+/// The band's half-width for a profile, px: for the pixel edge, as the
+/// B-spline engine's pixel-edge stage (the pixel's extent along a normal,
+/// two blur deviations and half a pixel of each flat level; at least
+/// 1.5 px; rounded up to a quarter pixel).
+pub(crate) fn band_half_width(profile: ModelProfile) -> f64 {
+    match profile {
+        ModelProfile::PixelEdge { blur } => {
+            let r = FRAC_1_SQRT_2 + 2.0 * blur + 0.5;
+            (r.max(1.5) * 4.0).ceil() / 4.0
+        }
+        ModelProfile::Paper { half_width, .. } => half_width,
+    }
+}
+
+/// How the pixels are modelled under `profile` and `config`.
+pub(crate) fn pixel_ctx(profile: ModelProfile, config: &ModelConfig) -> PixelCtx {
+    match profile {
+        ModelProfile::PixelEdge { blur } => PixelCtx {
+            reach: FRAC_1_SQRT_2 + BLUR_REACH * blur + 0.05,
+            exact: match config.coverage {
+                CoverageModel::Auto => blur <= EXACT_BLUR,
+                CoverageModel::Exact => true,
+                CoverageModel::PixelEdge => false,
+            },
+            exclude_corners: config.exclude_corners,
+        },
+        ModelProfile::Paper { half_width, .. } => PixelCtx {
+            reach: half_width + FRAC_1_SQRT_2,
+            exact: false,
+            exclude_corners: true,
+        },
+    }
+}
+
+/// Sums over the band at one point `z`.
+#[derive(Clone, Debug)]
+pub(crate) struct Eval {
+    /// `sum e^2`.
+    pub cost: f64,
+    /// `J^T J`, row-major `m x m`.
+    pub h: Vec<f64>,
+    /// `J^T e`.
+    pub g: Vec<f64>,
+    /// Pixels used.
+    pub used: usize,
+    /// Of which modelled by exact coverage.
+    pub coverage: usize,
+    /// Pixels left out.
+    pub excluded: usize,
+}
+
+fn evaluate(
+    geom: &Geometry,
+    pixels: &[BandPixel],
+    profile: ModelProfile,
+    corners: PixelCtx,
+    a: f64,
+    c: f64,
+) -> Eval {
+    let p = geom.params().len();
+    let m = p + 2;
+    let mut ev = Eval {
+        cost: 0.0,
+        h: vec![0.0; m * m],
+        g: vec![0.0; m],
+        used: 0,
+        coverage: 0,
+        excluded: 0,
+    };
+    let mut idx = [0usize; MAX_GRAD + 2];
+    let mut val = [0.0f64; MAX_GRAD + 2];
+    for px in pixels {
+        let Some((gamma, dgamma, exact)) = pixel_model(geom, px.q, profile, corners) else {
+            ev.excluded += 1;
+            continue;
+        };
+        ev.used += 1;
+        ev.coverage += usize::from(exact);
+        let e = px.f - a - c * gamma;
+        let mut len = 0;
+        for (i, v) in dgamma.iter() {
+            idx[len] = i;
+            val[len] = -c * v;
+            len += 1;
+        }
+        idx[len] = p;
+        val[len] = -1.0;
+        idx[len + 1] = p + 1;
+        val[len + 1] = -gamma;
+        len += 2;
+        for k in 0..len {
+            ev.g[idx[k]] += val[k] * e;
+            let row = idx[k] * m;
+            for l in 0..len {
+                ev.h[row + idx[l]] += val[k] * val[l];
+            }
+        }
+        ev.cost += e * e;
+    }
+    ev
+}
+
+/// The linear least-squares gray levels `(a, c)` and the sum of squares
+/// at a fixed shape; `None` without contrast.
+pub(crate) fn levels(
+    geom: &Geometry,
+    pixels: &[BandPixel],
+    profile: ModelProfile,
+    corners: PixelCtx,
+) -> Option<(f64, f64, f64)> {
+    let (mut n, mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for px in pixels {
+        let Some((g, ..)) = pixel_model(geom, px.q, profile, corners) else {
+            continue;
+        };
+        n += 1.0;
+        sg += g;
+        sgg += g * g;
+        sf += px.f;
+        sfg += px.f * g;
+        sff += px.f * px.f;
+    }
+    let det = n * sgg - sg * sg;
+    if det.is_nan() || det <= 1e-12 * n * n {
+        return None;
+    }
+    let a = (sgg * sf - sg * sfg) / det;
+    let c = (n * sfg - sg * sf) / det;
+    Some((a, c, (sff - a * sf - c * sfg).max(0.0)))
+}
+
+/// How one run of iterations on a fixed band ended.
+pub(crate) struct LmEnd {
+    pub geom: Geometry,
+    pub a: f64,
+    pub c: f64,
+    pub iterations: usize,
+    pub outcome: Outcome,
+    /// The sums at the final point (undamped).
+    pub eval: Eval,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn levenberg_marquardt(
+    geom: Geometry,
+    pixels: &[BandPixel],
+    profile: ModelProfile,
+    corners: PixelCtx,
+    (a, c): (f64, f64),
+    tolerance: f64,
+    max_iterations: usize,
+) -> LmEnd {
+    let p = geom.params().len();
+    let m = p + 2;
+    let scales = geom.scales();
+    let mut z = geom.params();
+    z.extend([a, c]);
+    let mut geom = geom;
+    let mut cur = evaluate(&geom, pixels, profile, corners, a, c);
+    let end = |geom: Geometry, z: &[f64], iterations, outcome, eval| LmEnd {
+        geom,
+        a: z[p],
+        c: z[p + 1],
+        iterations,
+        outcome,
+        eval,
+    };
+    if cur.used < m + 2 {
+        return end(geom, &z, 0, diverged(Divergence::Degenerate), cur);
+    }
+    let mut mu = MU_START;
+    for it in 1..=max_iterations {
+        let max_diag = (0..m).map(|i| cur.h[i * m + i]).fold(0.0, f64::max);
+        let mut accepted = None;
+        while mu < MU_MAX {
+            let mut damped = cur.h.clone();
+            for i in 0..m {
+                damped[i * m + i] += mu * cur.h[i * m + i].max(1e-9 * max_diag);
+            }
+            let Ok(chol) = DenseCholesky::factor(&damped, m) else {
+                mu *= 10.0;
+                continue;
+            };
+            let mut step: Vec<f64> = cur.g.iter().map(|v| -v).collect();
+            chol.solve_in_place(&mut step);
+            let size = (0..p)
+                .map(|k| (step[k] * scales[k]).abs())
+                .fold(0.0, f64::max);
+            if !size.is_finite() {
+                return end(geom, &z, it, diverged(Divergence::NonFinite), cur);
+            }
+            if size > MAX_STEP {
+                step.iter_mut().for_each(|s| *s *= MAX_STEP / size);
+            }
+            let trial: Vec<f64> = z.iter().zip(&step).map(|(a, b)| a + b).collect();
+            let Some(trial_geom) = geom.with_params(&trial[..p]) else {
+                mu *= 10.0;
+                continue;
+            };
+            let ev = evaluate(
+                &trial_geom,
+                pixels,
+                profile,
+                corners,
+                trial[p],
+                trial[p + 1],
+            );
+            // A step under the tolerance is taken whatever the rounding of
+            // the sum of squares says.
+            if ev.cost <= cur.cost || size < tolerance {
+                accepted = Some((trial, trial_geom, ev, size));
+                mu = (mu * 0.1).max(1e-12);
+                break;
+            }
+            mu *= 10.0;
+        }
+        let Some((trial, trial_geom, ev, size)) = accepted else {
+            // No step lowers the sum of squares: a minimum, to rounding.
+            return end(geom, &z, it, Outcome::Converged, cur);
+        };
+        (z, geom, cur) = (trial, trial_geom, ev);
+        if cur.used < m + 2 {
+            return end(geom, &z, it, diverged(Divergence::Degenerate), cur);
+        }
+        if z[p + 1].is_nan() || z[p + 1].abs() <= 1e-9 {
+            return end(geom, &z, it, diverged(Divergence::NoContrast), cur);
+        }
+        if size < tolerance {
+            return end(geom, &z, it, Outcome::Converged, cur);
+        }
+    }
+    end(geom, &z, max_iterations, Outcome::IterationLimit, cur)
+}
+
+fn diverged(divergence: Divergence) -> Outcome {
+    Outcome::Diverged { divergence }
+}
+
+/// The result of [`run`].
+pub(crate) struct Solved {
+    pub geom: Geometry,
+    pub a: f64,
+    pub c: f64,
+    pub profile: ModelProfile,
+    pub half_width: f64,
+    pub outcome: Outcome,
+    pub iterations: usize,
+    pub passes: usize,
+    pub eval: Eval,
+}
+
+/// Why [`run`] could not start.
+pub(crate) enum StartFailure {
+    /// A band pixel of the start lies outside the image.
+    Outside([f64; 2], f64),
+    /// The band has too few pixels for the unknowns.
+    Empty(usize, usize),
+    /// No contrast at the start.
+    NoContrast,
+}
+
+/// The whole fit from `start` (module docs).
+pub(crate) fn run(
+    image: &crate::Image,
+    start: Geometry,
+    profile: ModelProfile,
+    config: &ModelConfig,
+) -> Result<Solved, StartFailure> {
+    let mut profile = profile;
+    let mut half_width = band_half_width(profile);
+    let mut corners = pixel_ctx(profile, config);
+    let unknowns = start.params().len() + 2;
+    let coarse = half_width + COARSE_EXTRA;
+    let pixels =
+        select(image, &start, coarse, corners).map_err(|q| StartFailure::Outside(q, coarse))?;
+    if pixels.len() < unknowns + 2 {
+        return Err(StartFailure::Empty(pixels.len(), unknowns));
+    }
+    let (a, c, _) = levels(&start, &pixels, profile, corners).ok_or(StartFailure::NoContrast)?;
+    // As the B-spline engine: a contrast lost in the spread of the values.
+    let n = pixels.len() as f64;
+    let mean = pixels.iter().map(|p| p.f).sum::<f64>() / n;
+    let spread = (pixels.iter().map(|p| (p.f - mean).powi(2)).sum::<f64>() / n).sqrt();
+    if c.abs() <= 1e-9 || c.abs() < 1e-6 * spread {
+        return Err(StartFailure::NoContrast);
+    }
+    let mut lm = levenberg_marquardt(
+        start,
+        &pixels,
+        profile,
+        corners,
+        (a, c),
+        COARSE_TOLERANCE.max(config.tolerance),
+        config.max_iterations,
+    );
+    let mut iterations = lm.iterations;
+    let mut passes = 1;
+    let mut blur_updates = 0;
+    let mut previous: Option<Vec<BandPixel>> = None;
+    while !matches!(lm.outcome, Outcome::Diverged { .. }) && passes < MAX_PASSES {
+        let pixels = match select(image, &lm.geom, half_width, corners) {
+            Ok(p) => p,
+            Err([x, y]) => {
+                lm.outcome = diverged(Divergence::LeftImage { x, y });
+                break;
+            }
+        };
+        if previous.as_ref() == Some(&pixels) {
+            break;
+        }
+        passes += 1;
+        let budget = config.max_iterations.saturating_sub(iterations).max(1);
+        lm = levenberg_marquardt(
+            lm.geom,
+            &pixels,
+            profile,
+            corners,
+            (lm.a, lm.c),
+            config.tolerance,
+            budget,
+        );
+        iterations += lm.iterations;
+        if let (ModelProfile::PixelEdge { blur }, true, Outcome::Converged) =
+            (profile, config.fit_blur, lm.outcome)
+        {
+            if blur_updates < MAX_BLUR_UPDATES {
+                let fitted = fit_blur(&lm, &pixels, blur, corners);
+                if (fitted - blur).abs() > BLUR_TOLERANCE {
+                    blur_updates += 1;
+                    profile = ModelProfile::PixelEdge { blur: fitted };
+                    half_width = band_half_width(profile);
+                    corners = pixel_ctx(profile, config);
+                    previous = None;
+                    continue;
+                }
+            }
+        }
+        previous = Some(pixels);
+    }
+    Ok(Solved {
+        geom: lm.geom,
+        a: lm.a,
+        c: lm.c,
+        profile,
+        half_width,
+        outcome: lm.outcome,
+        iterations,
+        passes,
+        eval: lm.eval,
+    })
+}
+
+/// The optical blur (px) of the pixel-edge profile that best fits the band
+/// (golden section within 30 % + 0.15 px of `current`, and 0 when that is
+/// as good, as the B-spline engine's `fit_blur`), by profile likelihood:
+/// for each blur tried, the shape and gray levels are refitted (a few
+/// iterations from `end`). At a fixed shape the blur would stay wherever
+/// the start put it when the band cannot tell the blur from a shift (an
+/// axis-aligned edge in an unblurred image shows a single row of partial
+/// pixels: three gray levels, as many unknowns); refitted, every blur fits
+/// equally well there and the smallest, 0, is taken.
+fn fit_blur(end: &LmEnd, pixels: &[BandPixel], current: f64, ctx: PixelCtx) -> f64 {
+    // Every pixel by the pixel-edge profile, corners left out, for every
+    // blur tried: the sums compare the same pixels.
+    let ctx = PixelCtx {
+        exact: false,
+        exclude_corners: true,
+        ..ctx
+    };
+    let ssr = |blur: f64| {
+        let run = levenberg_marquardt(
+            end.geom.clone(),
+            pixels,
+            ModelProfile::PixelEdge { blur },
+            ctx,
+            (end.a, end.c),
+            BLUR_FIT_TOLERANCE,
+            BLUR_FIT_ITERATIONS,
+        );
+        run.eval.cost
+    };
+    let lo = (0.7 * current - 0.15).max(0.0);
+    let hi = 1.3 * current + 0.15;
+    let best = crate::psf::golden(lo, hi, 12, ssr);
+    if lo == 0.0 && ssr(0.0) <= ssr(best) * (1.0 + 1e-9) + 1e-20 {
+        0.0
+    } else {
+        best
+    }
+}

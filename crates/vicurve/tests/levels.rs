@@ -1,0 +1,129 @@
+//! Gray levels that vary along the curve: a silhouette under uneven light.
+
+use vicurve::curve::InitialCurve;
+use vicurve::fit::{measure, FitConfig, LevelModel, Measurement, Outcome};
+use vicurve::render::{render, Method, RenderSpec};
+use vicurve::truth::{evaluate, ErrorStats, Shape};
+use vicurve::virtual_image::Kind;
+use vicurve::Image;
+
+const CX: f64 = 160.3;
+const CY: f64 = 159.6;
+const R: f64 = 110.0;
+
+/// An exact-coverage disc (gray 0.7 on 0.15, blur `blur` px) under light
+/// that changes linearly by `gradient` (relative) per disc radius along
+/// the direction (0.8, 0.6), quantised to 8 bits (nothing saturates).
+fn lit_disc(blur: f64, gradient: f64, noise: f64, seed: u64) -> Image {
+    let spec = RenderSpec {
+        width: 320,
+        height: 320,
+        shape: Shape::Circle {
+            cx: CX,
+            cy: CY,
+            r: R,
+        },
+        kind: Kind::Silhouette,
+        method: Method::Coverage,
+        foreground: 0.7,
+        background: 0.15,
+        blur_sigma: blur,
+        noise,
+        seed,
+        bits: None,
+        ..RenderSpec::default()
+    };
+    let image = render(&spec).unwrap();
+    Image::from_fn(320, 320, |x, y| {
+        let t = (0.8 * (x as f64 - CX) + 0.6 * (y as f64 - CY)) / R;
+        let light = 1.0 + gradient * t;
+        (image.get(x, y) * light * 255.0).round() / 255.0
+    })
+}
+
+fn measure_with(image: &Image, levels: LevelModel) -> (Measurement, ErrorStats) {
+    let config = FitConfig {
+        levels,
+        ..FitConfig::default()
+    };
+    let init = InitialCurve::Circle {
+        cx: CX + 3.0,
+        cy: CY - 2.0,
+        r: R + 4.0,
+    };
+    let m = measure(image, &init, &config).unwrap();
+    if m.outcome != Outcome::Converged {
+        for s in &m.stages {
+            eprintln!(
+                "R {} {:?} el {} it {} reref {} outcome {}",
+                s.half_width, s.profile, s.elements, s.iterations, s.rereferences, s.outcome
+            );
+        }
+    }
+    assert_eq!(m.outcome, Outcome::Converged);
+    let stats = evaluate(
+        &m.points(),
+        &Shape::Circle {
+            cx: CX,
+            cy: CY,
+            r: R,
+        },
+    )
+    .unwrap();
+    (m, stats)
+}
+
+/// Light changing by +-35 % across the disc: with the varying levels the
+/// bias stays within 2e-3 px on a sharp edge (the issue's bound), and within
+/// 6e-3 px blurred by 1.5 px; the global pair is off by 0.15 and 0.6 px.
+/// The levels found follow the light.
+///
+/// The light also tilts each plateau across the band, which the levels do
+/// not model (see `fit::levels`): a systematic error along the curve of
+/// 3.3e-3 px at most on the sharp edge, 3.8e-2 px blurred (its band is
+/// wider), bounded here.
+#[test]
+fn disc_under_an_illumination_gradient() {
+    for (blur, max_bias, max_error) in [(0.0, 2e-3, 5e-3), (1.5, 6e-3, 5e-2)] {
+        let image = lit_disc(blur, 0.35, 0.0, 0);
+        let (m, varying) = measure_with(&image, LevelModel::default());
+        let (_, global) = measure_with(&image, LevelModel::Global);
+        eprintln!(
+            "blur {blur}: varying bias {:+.2e} max {:.2e} scatter {:.2e}; \
+             global bias {:+.2e} max {:.2e}",
+            varying.bias, varying.max_abs, varying.scatter, global.bias, global.max_abs
+        );
+        assert!(varying.bias.abs() <= max_bias, "{varying:?}");
+        assert!(varying.max_abs <= max_error, "{varying:?}");
+        assert!(global.bias.abs() > 20.0 * max_bias, "{global:?}");
+        // The contrast found along the curve follows the light: 0.55 times
+        // it, within 2 %.
+        assert!(!m.levels.is_empty());
+        let curve = &m.curve;
+        for l in &m.levels {
+            let [x, y] = curve.point(l.s.min(curve.param_length()));
+            let t = (0.8 * (x - CX) + 0.6 * (y - CY)) / R;
+            let expected = 0.55 * (1.0 + 0.35 * t);
+            assert!(
+                (l.c - expected).abs() < 0.02 * 0.55,
+                "c = {} at s = {}, expected {expected}",
+                l.c,
+                l.s
+            );
+        }
+    }
+}
+
+/// Under even light the varying levels explain nothing beyond the noise:
+/// the fit drops them (they would cost precision, about 12 % more scatter
+/// at 1 % noise) and gives the global pair's result.
+#[test]
+fn even_light_same_result_as_global_pair() {
+    let image = lit_disc(1.0, 0.0, 0.01, 4);
+    let (m, varying) = measure_with(&image, LevelModel::default());
+    let (_, global) = measure_with(&image, LevelModel::Global);
+    eprintln!("even light: varying {varying:?}\nglobal {global:?}");
+    assert!(m.levels.is_empty(), "the levels were kept");
+    assert!((varying.bias - global.bias).abs() < 1e-6);
+    assert!((varying.scatter - global.scatter).abs() < 1e-6);
+}
