@@ -215,7 +215,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         ShapeName::Necking => {
             return Err(Failure::Error(
                 "necking is a sequence: see synth_sequence".into(),
-            ))
+            ));
         }
     };
     let line = match a.shape {

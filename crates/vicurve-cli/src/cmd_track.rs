@@ -30,10 +30,10 @@ pub struct Args {
     #[arg(long)]
     pub stages: Option<String>,
     /// Stages of the frames started from the previous result: `default`
-    /// (the full default schedule, the default: its last, pixel-edge stage
-    /// is what makes the result exact, and the schedule cannot yet end with
-    /// it otherwise) or `R:N,...` (faster, less accurate: see
-    /// docs/benchmarks.md).
+    /// (the default schedule) or `R:N,...`. Default: those of the first
+    /// frame (`--stages`, else the default schedule, whose last, pixel-edge
+    /// stage is what makes a silhouette exact; `2:auto` is faster and less
+    /// accurate: see docs/benchmarks.md).
     #[arg(long)]
     pub track_stages: Option<String>,
     /// Degree of the B-splines (1 to 5).

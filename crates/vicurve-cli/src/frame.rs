@@ -249,18 +249,30 @@ pub fn measure_frame(
                 continue;
             }
         };
-        let written = write_curve_files(
-            job,
-            fingerprint,
-            index,
-            files,
-            spec,
-            r,
-            m,
-            &path_text,
-            &image,
-        );
-        let mut row = row.curve(m, &r.started_from, &r.note);
+        let record = FrameRecord {
+            result: ResultFile::new(
+                &path_text,
+                (image.width(), image.height()),
+                &r.init,
+                &r.config,
+                m,
+            ),
+            sequence: SequenceInfo {
+                job: fingerprint,
+                frame: index,
+                curve: &spec.name,
+                started_from: &r.started_from,
+                note: &r.note,
+            },
+        };
+        let written = write_curve_files(job, files, &spec.name, &record, m);
+        // The summary's derived measures are the result file's.
+        let derived = &record.result.derived;
+        let closed = match &derived.closed_error {
+            Some(e) => Err(e.as_str()),
+            None => Ok(derived.closed.as_ref()),
+        };
+        let mut row = row.curve(m, &r.started_from, &r.note, closed);
         if let Err(e) = written {
             problems.push(format!("{stem}: {}: {e}", spec.name));
             rows.push(row.failed("failed", &e));
@@ -273,7 +285,13 @@ pub fn measure_frame(
                     spec.name
                 ));
             }
-            _ => {
+            o => {
+                if o == Outcome::IterationLimit {
+                    problems.push(format!(
+                        "{stem}: {}: the iteration limit was reached before convergence (the curve is kept)",
+                        spec.name
+                    ));
+                }
                 // Go on from the curve as written (see `resume`).
                 match rebuild(&m.curve_data()) {
                     Ok(c) => {
@@ -407,7 +425,7 @@ fn measure_curve<'s>(
                         config: spec.tracked.clone(),
                         started_from: p.stem.clone(),
                         note: String::new(),
-                    }
+                    };
                 }
             };
             let first = run(start.clone(), &spec.tracked);
@@ -424,7 +442,9 @@ fn measure_curve<'s>(
                     init,
                     config: spec.first.clone(),
                     started_from: p.stem.clone(),
-                    note: format!("the tracked fit failed ({why}); measured again with the first frame's stages"),
+                    note: format!(
+                        "the tracked fit failed ({why}); measured again with the first frame's stages"
+                    ),
                 },
                 _ => CurveResult {
                     measured: first,
@@ -469,40 +489,19 @@ fn record_points(curve: &SplineCurve) -> Vec<[f64; 2]> {
 }
 
 /// The JSON and points CSV of one curve.
-#[allow(clippy::too_many_arguments)]
 fn write_curve_files(
     job: &Job,
-    fingerprint: &str,
-    index: usize,
     files: &FrameFiles,
-    spec: &CurveSpec,
-    r: &CurveResult,
+    name: &str,
+    record: &FrameRecord,
     m: &Measurement,
-    path_text: &str,
-    image: &Image,
 ) -> Result<(), String> {
-    let record = FrameRecord {
-        result: ResultFile::new(
-            path_text,
-            (image.width(), image.height()),
-            &r.init,
-            &r.config,
-            m,
-        ),
-        sequence: SequenceInfo {
-            job: fingerprint,
-            frame: index,
-            curve: &spec.name,
-            started_from: &r.started_from,
-            note: &r.note,
-        },
-    };
-    let text = serde_json::to_string_pretty(&record)
+    let text = serde_json::to_string_pretty(record)
         .map_err(|e| format!("cannot encode the result: {e}"))?
         + "\n";
     if job.outputs.points {
         // The points first: the JSON is what marks the curve done.
-        let target = files.points(&spec.name);
+        let target = files.points(name);
         let tmp = target.with_file_name(format!(
             ".{}.tmp-{}",
             target.file_name().unwrap_or_default().to_string_lossy(),
@@ -512,7 +511,7 @@ fn write_curve_files(
         std::fs::rename(&tmp, &target)
             .map_err(|e| format!("cannot write {}: {e}", target.display()))?;
     }
-    write_atomic(&files.json(&spec.name), text.as_bytes())
+    write_atomic(&files.json(name), text.as_bytes())
 }
 
 /// Every curve of the frame over the image.

@@ -33,6 +33,16 @@
 //! ```
 //!
 //! Unknown keys are errors (a misspelt option is not silently ignored).
+//!
+//! Frames started from the previous frame's result use the first frame's
+//! stages unless a curve says otherwise (`track_stages`; `"default"` is the
+//! default schedule). A tracked start is already within a fraction of a
+//! pixel of the edge, so the coarse bands (20, 10, 5 px) have little to do
+//! (a few iterations each), but only the default schedule ends with the
+//! pixel-edge stage and the settled last stage that make a silhouette
+//! exact: with `2:auto` alone, the example's 8 frames take 0.35 s instead of
+//! 0.83 s and the width of the synthetic necking specimen is off by 0.06 to
+//! 0.14 px instead of under 0.01 (docs/benchmarks.md, "Sequences").
 
 use crate::cmd_measure::{parse_init, parse_interp, parse_polarity};
 use crate::Failure;
@@ -42,15 +52,6 @@ use vicurve::curve::InitialCurve;
 use vicurve::fit::{parse_stages, FitConfig};
 use vicurve::virtual_image::Kind;
 
-/// Frames started from the previous frame's result use the first frame's
-/// stages unless a curve says otherwise (`track_stages`; `"default"` is the
-/// default schedule). A tracked start is already within a fraction of a
-/// pixel of the edge, so the coarse bands (20, 10, 5 px) have little to do
-/// (a few iterations each), but only the default schedule ends with the
-/// pixel-edge stage and the settled last stage that make a silhouette
-/// exact: with `2:auto` alone, frames are about 4 times faster and the
-/// width of the synthetic necking specimen is off by 0.02 to 0.14 px
-/// instead of under 0.01 (docs/benchmarks.md, "Sequences").
 /// The job file as written (TOML).
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
@@ -307,7 +308,7 @@ pub fn curve_spec(c: &CurveFile, index: usize, base: &Path) -> Result<CurveSpec,
         Some(k) => {
             return Err(context(Failure::Error(format!(
                 "unknown kind '{k}' (expected silhouette or contour)"
-            ))))
+            ))));
         }
     };
     let mut first = FitConfig {
@@ -378,7 +379,7 @@ fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure>
             _ => {
                 return Err(Failure::Error(format!(
                     "width '{name}': unknown axis '{a}' (expected \"x\", \"y\", \"estimate\" or [x0, y0, dx, dy])"
-                )))
+                )));
             }
         },
         Some(AxisFile::Explicit(v)) => {

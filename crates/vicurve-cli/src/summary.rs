@@ -98,8 +98,15 @@ impl Row {
     }
 
     /// A measured curve: fit columns, plus the derived measures of a
-    /// closed curve (an error computing them goes to `reason`).
-    pub fn curve(mut self, m: &Measurement, started_from: &str, note: &str) -> Row {
+    /// closed curve as the result file has them (`closed`, or why there are
+    /// none, which goes to `reason`).
+    pub fn curve(
+        mut self,
+        m: &Measurement,
+        started_from: &str,
+        note: &str,
+        closed: Result<Option<&ClosedMeasures>, &str>,
+    ) -> Row {
         let (outcome, reason) = match m.outcome {
             Outcome::Converged => ("converged", String::new()),
             Outcome::IterationLimit => {
@@ -107,13 +114,11 @@ impl Row {
             }
             Outcome::Diverged { divergence } => ("diverged", divergence.to_string()),
         };
-        let reason = match (reason.is_empty(), note.is_empty()) {
-            (_, true) => reason,
-            (true, false) => note.to_string(),
-            (false, false) => format!("{reason}; {note}"),
-        };
+        let mut reasons: Vec<String> = [reason, note.to_string()]
+            .into_iter()
+            .filter(|r| !r.is_empty())
+            .collect();
         self.set("outcome", outcome.into());
-        self.set("reason", reason);
         self.set("started_from", started_from.into());
         self.set("iterations", m.iterations().to_string());
         self.sci("residual", m.residual_rms());
@@ -121,16 +126,12 @@ impl Row {
         if let Some(a) = m.area() {
             self.num("area", a);
         }
-        if m.curve.is_closed() {
-            match vicurve::derived::closed_measures(m) {
-                Ok(c) => self.closed(&c),
-                Err(e) => {
-                    let r = self.cells[3].clone();
-                    let sep = if r.is_empty() { "" } else { "; " };
-                    self.set("reason", format!("{r}{sep}no circle or ellipse: {e}"));
-                }
-            }
+        match closed {
+            Ok(Some(c)) => self.closed(c),
+            Ok(None) => {}
+            Err(e) => reasons.push(format!("no circle or ellipse: {e}")),
         }
+        self.set("reason", reasons.join("; "));
         self
     }
 

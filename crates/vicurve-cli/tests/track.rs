@@ -115,6 +115,12 @@ fn necking_widths_match_the_exact_specimen() {
         assert_eq!(w["outcome"], "measured");
         let pos: f64 = w["min_width_position"].parse().unwrap();
         let min: f64 = w["min_width"].parse().unwrap();
+        // The figures of docs/benchmarks.md (`-- --nocapture`).
+        println!(
+            "{stem}: {count} sections, width error up to {worst:.4} px; minimum {:+.4} px from the truth, at {:+.3} px from the narrowest section",
+            min - bar.min_width(),
+            pos - bar.x_neck
+        );
         assert!((pos - bar.x_neck).abs() <= 1.0, "{stem}: minimum at {pos}");
         assert!((min - bar.min_width()).abs() <= 0.01, "{stem}: {min}");
         for edge in ["top", "bottom"] {
