@@ -115,8 +115,8 @@ fn disc_under_an_illumination_gradient() {
 }
 
 /// Under even light the varying levels explain nothing beyond the noise:
-/// the fit drops them (they would cost precision, about 12 % more scatter
-/// at 1 % noise) and gives the global pair's result.
+/// the fit drops them (kept, they would only add noise) and gives the
+/// global pair's result.
 #[test]
 fn even_light_same_result_as_global_pair() {
     let image = lit_disc(1.0, 0.0, 0.01, 4);

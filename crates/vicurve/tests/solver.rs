@@ -314,3 +314,20 @@ fn large_cyclic_system() {
     assert_eq!(m.get(n - 3, 0), 1.0 / 4.0);
     assert_eq!(m.get(n - 4, 0), 0.0);
 }
+
+/// Re-factoring in place gives the factor of the new matrix, also after a
+/// failed attempt, and rejects a matrix of another size.
+#[test]
+fn dense_refactor_matches_a_fresh_factor() {
+    let a = [4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0];
+    let b = [9.0, -2.0, 1.0, -2.0, 5.0, 0.3, 1.0, 0.3, 4.0];
+    let singular = [1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let mut chol = DenseCholesky::factor(&a, 3).unwrap();
+    assert!(chol.refactor(&singular).is_err());
+    chol.refactor(&b).unwrap();
+    let fresh = DenseCholesky::factor(&b, 3).unwrap();
+    for (x, y) in chol.factor_matrix().iter().zip(fresh.factor_matrix()) {
+        assert!((x - y).abs() < 1e-15, "{x} {y}");
+    }
+    assert!(chol.refactor(&[1.0; 4]).is_err());
+}

@@ -51,7 +51,7 @@ use crate::error::{Error, Result};
 use crate::fit::levels::{self, LevelModel};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
-use crate::solver::{BandCholesky, SymBandMatrix};
+use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
@@ -494,10 +494,9 @@ impl Correlation {
                 sff += w * f * f;
             }
             let b = rhs.clone();
-            if !levels::cholesky_in_place(&mut mat, dim) {
-                return None;
-            }
-            levels::cholesky_solve(&mat, dim, &mut rhs);
+            DenseCholesky::factor(&mat, dim)
+                .ok()?
+                .solve_in_place(&mut rhs);
             let fit: f64 = b.iter().zip(&rhs).map(|(u, v)| u * v).sum();
             return Some((sff - fit).max(0.0));
         }

@@ -59,11 +59,10 @@ impl Default for LevelModel {
 }
 
 /// Default element length of varying levels, pixels: light that changes
-/// over a few hundred pixels is followed (a linear gradient across a 220 px
-/// disc leaves a bias of 1e-3 px, against 0.4 px with the global pair),
-/// while each element holds enough band pixels that the levels add little
-/// noise when they are kept (the scatter at 1 % noise grows by about 12 %
-/// in the narrow last band; 25 % with 64 px elements).
+/// over a few hundred pixels is followed (`tests/levels.rs`: a ±35 %
+/// gradient across a 220 px disc), while each element holds many band
+/// pixels, so that kept levels add little noise through their coupling with
+/// the displacement (shorter elements add more).
 pub const DEFAULT_LEVEL_ELEMENT: f64 = 128.0;
 
 /// Most elements of varying levels (longer elements beyond): the dense
@@ -108,7 +107,7 @@ impl LevelModel {
 /// Light that changes across the image also tilts both plateaus of an edge
 /// across the band, by a different amount each; that is not modelled. Fitted
 /// jointly with the curve in the narrow last band, tilts are confounded with
-/// its position (measured: the scatter at 1 % noise grew fourfold); they
+/// its position (a trial multiplied the scatter at 1 % noise); they
 /// would have to be estimated on the plateaus beyond the band and held
 /// fixed. The effect: see `tests/levels.rs`.
 pub(crate) const FEATURES: usize = 2;
@@ -233,49 +232,5 @@ impl LevelBasis {
                 }
             }
         }
-    }
-}
-
-/// In-place dense Cholesky of the row-major `n x n` symmetric `a` (lower
-/// triangle overwritten by `L`). `false` when not positive definite (a pivot
-/// under `1e-12` of the largest diagonal entry).
-pub(crate) fn cholesky_in_place(a: &mut [f64], n: usize) -> bool {
-    let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0f64, f64::max);
-    if !(max_diag.is_finite() && max_diag > 0.0) {
-        return false;
-    }
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= a[i * n + k] * a[j * n + k];
-            }
-            if j < i {
-                a[i * n + j] = s / a[j * n + j];
-            } else if s > 1e-12 * max_diag && s.is_finite() {
-                a[i * n + i] = s.sqrt();
-            } else {
-                return false;
-            }
-        }
-    }
-    true
-}
-
-/// Solve `L L^T x = b` in place with the factor of [`cholesky_in_place`].
-pub(crate) fn cholesky_solve(l: &[f64], n: usize, b: &mut [f64]) {
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[i * n + k] * b[k];
-        }
-        b[i] = s / l[i * n + i];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= l[k * n + i] * b[k];
-        }
-        b[i] = s / l[i * n + i];
     }
 }

@@ -32,9 +32,30 @@ impl DenseCholesky {
                 format!("{} values for a {n}x{n} matrix (n must be > 0)", a.len()),
             ));
         }
+        let mut chol = DenseCholesky {
+            n,
+            l: vec![0.0; n * n],
+        };
+        chol.refactor(a)?;
+        Ok(chol)
+    }
+
+    /// Factors another `n x n` matrix `a` (same size) into this factor's
+    /// storage, without allocating: for systems re-factored in a loop.
+    ///
+    /// Errors: those of [`DenseCholesky::factor`]; after an error the factor
+    /// is not usable (refactor again before solving).
+    pub fn refactor(&mut self, a: &[f64]) -> Result<()> {
+        let n = self.n;
+        if a.len() != n * n {
+            return Err(Error::invalid(
+                "matrix",
+                format!("{} values for a {n}x{n} matrix", a.len()),
+            ));
+        }
         let threshold = pivot_threshold((0..n).map(|i| a[i * n + i]))
             .map_err(|index| Error::NotPositiveDefinite { index })?;
-        let mut l = vec![0.0; n * n];
+        let l = &mut self.l;
         for i in 0..n {
             for j in 0..=i {
                 let mut s = a[i * n + j];
@@ -50,7 +71,7 @@ impl DenseCholesky {
                 }
             }
         }
-        Ok(DenseCholesky { n, l })
+        Ok(())
     }
 
     /// Size `n` of the factored matrix.

@@ -11,10 +11,10 @@
 use super::{Correlation, Step, StepFailure, MAX_OUTSIDE};
 use crate::band::Band;
 use crate::error::{Error, Result};
-use crate::fit::levels::{cholesky_in_place, cholesky_solve, features, LevelBasis, FEATURES};
+use crate::fit::levels::{features, LevelBasis, FEATURES};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
-use crate::solver::BandCholesky;
+use crate::solver::{BandCholesky, DenseCholesky};
 use crate::spline::Basis;
 use rayon::prelude::*;
 
@@ -48,9 +48,12 @@ pub(crate) struct Varying {
     /// `M0^-1 B`, same layout.
     y: Vec<f64>,
     /// Factor of `K = S - B^T M0^-1 B`, dense `dim x dim`.
-    k_factor: Vec<f64>,
+    k_factor: DenseCholesky,
     /// Factor of the levels' normal matrix `S` at `U = 0` (pulled image).
-    s_factor: Vec<f64>,
+    s_factor: DenseCholesky,
+    /// Factor of the levels' normal matrix at the current displacement
+    /// (pushed profile), re-factored in place each iteration.
+    mat_factor: DenseCholesky,
     /// `sum w dg^2 N_i` (the row sums of `M0`).
     dden: Vec<f64>,
     /// Residual sum of squares of the best global pair at the last
@@ -120,9 +123,12 @@ impl Varying {
                 k[r * dim + c] -= dot;
             }
         }
-        if !cholesky_in_place(&mut k, dim) || !cholesky_in_place(&mut s_mat, dim) {
+        let (Ok(k_factor), Ok(s_factor)) = (
+            DenseCholesky::factor(&k, dim),
+            DenseCholesky::factor(&s_mat, dim),
+        ) else {
             return Err(Error::NotPositiveDefinite { index: n });
-        }
+        };
         let chunks = (rayon::current_num_threads() * 2).clamp(1, 64);
         let per = band.len().div_ceil(chunks).max(1);
         let count = band.len().div_ceil(per);
@@ -142,8 +148,9 @@ impl Varying {
             ssr_global: f64::NAN,
             b,
             y,
-            k_factor: k,
-            s_factor: s_mat,
+            mat_factor: s_factor.clone(),
+            k_factor,
+            s_factor,
             dden,
             fbuf: vec![0.0; band.len()],
             gbuf: vec![0.0; band.len()],
@@ -178,7 +185,7 @@ impl Varying {
                 .sum();
         }
         z[..dim].copy_from_slice(&t[..dim]);
-        cholesky_solve(&self.k_factor, dim, &mut z[..dim]);
+        self.k_factor.solve_in_place(&mut z[..dim]);
         t[..dim].iter().zip(&z[..dim]).map(|(a, b)| a * b).sum()
     }
 
@@ -290,7 +297,6 @@ impl Correlation {
                 .unwrap_or([f64::NAN; 2]);
             return Err(StepFailure::LeftImage(q));
         }
-        let dim = var.theta.len();
         let mut sums = [0.0; 9];
         var.t.fill(0.0);
         if pushed.is_some() {
@@ -334,18 +340,22 @@ impl Correlation {
             if c_global.abs() <= 1e-9 || c_global.abs() < 1e-6 * spread {
                 return Err(StepFailure::NoContrast);
             }
-            let solved = match pushed {
-                Some(_) => cholesky_in_place(&mut var.mat, dim),
-                None => {
-                    var.mat.copy_from_slice(&var.s_factor);
-                    true
-                }
+            // Pulled back, the levels' matrix is that of U = 0, factored
+            // once; pushed, it follows U.
+            let factor = match pushed {
+                Some(_) => var
+                    .mat_factor
+                    .refactor(&var.mat)
+                    .ok()
+                    .map(|_| &var.mat_factor),
+                None => Some(&var.s_factor),
             };
-            if solved {
-                cholesky_solve(&var.mat, dim, &mut var.t);
-                var.theta.copy_from_slice(&var.t);
-            } else {
-                var.set_constant(a_global, c_global);
+            match factor {
+                Some(f) => {
+                    f.solve_in_place(&mut var.t);
+                    var.theta.copy_from_slice(&var.t);
+                }
+                None => var.set_constant(a_global, c_global),
             }
         }
         var.have_theta = true;
@@ -422,7 +432,7 @@ impl Correlation {
                 .map(|(b, z)| b * z)
                 .sum();
         }
-        cholesky_solve(&var.k_factor, dim, &mut var.t);
+        var.k_factor.solve_in_place(&mut var.t);
         let mut max_step: f64 = 0.0;
         for (i, (r, d)) in rhs.iter_mut().zip(&var.d).enumerate() {
             let corr: f64 = var
