@@ -5,10 +5,11 @@ use crate::overlay::{write_png, write_svg, Layer, Style};
 use crate::Failure;
 use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
+use vicurve::fit::grow::{grow, EndReason, GrowConfig, GrowReport, Grown};
 use vicurve::fit::{
     measure, parse_stages, Coords, FitConfig, LevelModel, Measurement, Outcome, Polarity,
 };
-use vicurve::interp::Interpolation;
+use vicurve::interp::{Interpolation, Sampler};
 use vicurve::virtual_image::{Kind, Profile};
 use vicurve::Image;
 
@@ -26,7 +27,8 @@ pub struct Args {
     /// (else the longest edge crossing the image), its traced boundary.
     #[arg(long)]
     pub init: Option<String>,
-    /// Automatic start: the region containing this point `X,Y` (pixels).
+    /// Automatic start: the region containing this point `X,Y` (pixels);
+    /// for a contour, the line through it, followed along its ridge.
     #[arg(long, value_name = "X,Y")]
     pub pick: Option<String>,
     /// Automatic start: search only this rectangle `X0,Y0,X1,Y1` (pixels).
@@ -35,6 +37,11 @@ pub struct Args {
     /// Treat a `polyline:` start as closed (last point joins the first).
     #[arg(long)]
     pub closed: bool,
+    /// Grow an open start (`--init segment:...` or an open polyline) along
+    /// the curve, segment by segment, until it reaches the image border,
+    /// closes on itself or the edge ends; `--grow LEN` stops at LEN pixels.
+    #[arg(long, value_name = "LEN", num_args = 0..=1)]
+    pub grow: Option<Option<f64>>,
     /// `silhouette` (an edge between a dark and a bright region) or
     /// `contour` (a thin line).
     #[arg(long, default_value = "silhouette")]
@@ -86,13 +93,27 @@ pub struct Args {
     /// for the whole curve, the paper's).
     #[arg(long, default_value = "varying", value_name = "MODEL")]
     pub levels: String,
+    /// Corners: arc lengths (pixels) along the initial curve, from its
+    /// start, where the measured curve may have a corner or a tangent break
+    /// (repeated knots; see docs/breaks.md), e.g. `--break 120.5,240`.
+    #[arg(long = "break", value_name = "S1,S2", value_delimiter = ',')]
+    pub breaks: Vec<f64>,
     /// Fit a shape to the measured curve: `circle`, `ellipse`, `line` or
     /// `polygon:N` (its parameters with uncertainties are printed and
-    /// written as `model` in `--out`; `--points` samples the shape).
+    /// written as `model` in `--out`; `--points` samples the shape), or
+    /// `bspline-curve` (a free B-spline curve, its control points the
+    /// unknowns; `--dxf` and `--svg-curve` then export it).
     #[arg(long, value_name = "MODEL")]
     pub model: Option<vicurve::model::ShapeModel>,
     #[command(flatten)]
     pub outputs: Outputs,
+    /// Write diagnostics into DIR (created if missing): the band unwrapped
+    /// on the measured curve's (s, r) grid (band.png), the residual
+    /// image - virtual image (residual.png), the robust weights
+    /// (weights.png), the convergence of each stage (convergence.png) and
+    /// diagnostics.json; see docs/diagnostics.md.
+    #[arg(long, value_name = "DIR")]
+    pub diagnostics: Option<PathBuf>,
     /// `--dxf`, `--svg-curve` (see `cmd_export`).
     #[command(flatten)]
     pub cad: crate::cmd_export::CurveFiles,
@@ -146,14 +167,21 @@ pub fn run(args: Args) -> Result<(), Failure> {
         Some(init) => init,
         None => {
             if args.kind == Kind::Contour {
-                return Err(Failure::Error(
-                    "the automatic start finds silhouettes only: give a starting curve with --init for a contour".into(),
-                ));
-            }
-            let found = vicurve::start::find_silhouette(&image, &start).map_err(|e| {
+                let found = vicurve::start::ridge::find_line(&image, &start)
+                    .map_err(|e| format!("{e}; or give a starting curve with --init"))?;
+                eprintln!(
+                    "vicurve: automatic start: {} line followed from the picked point over {:.0} px (scale {} px), {} curve",
+                    if found.bright { "bright" } else { "dark" },
+                    found.length,
+                    found.scale,
+                    if found.closed { "closed" } else { "open" }
+                );
+                found.curve
+            } else {
+                let found = vicurve::start::find_silhouette(&image, &start).map_err(|e| {
                 format!("{e}; give a starting curve with --init, or point at the object with --pick X,Y")
             })?;
-            eprintln!(
+                eprintln!(
                 "vicurve: automatic start: {} {} region of {} pixels (threshold {:.4}), {} curve",
                 if found.bright { "bright" } else { "dark" },
                 if start.pick.is_some() {
@@ -165,20 +193,42 @@ pub fn run(args: Args) -> Result<(), Failure> {
                 found.threshold,
                 if found.closed { "closed" } else { "open" }
             );
-            found.curve
+                found.curve
+            }
         }
     };
-    let m = measure(&image, &init, &config)?;
+    let (m, grown) = match args.grow {
+        Some(length) => {
+            let g = grow_from(&image, &init, &config, length)?;
+            (g.measurement, Some(g.report))
+        }
+        None => (measure(&image, &init, &config)?, None),
+    };
     let path_text = args.image.display().to_string();
+    // Written whatever the outcome (a diverged fit is what they are for);
+    // a failure does not prevent the other outputs.
+    let diagnostics = match &args.diagnostics {
+        Some(dir) => crate::diagnostics::write(dir, &path_text, &image, &init, &config, &m),
+        None => Ok(()),
+    };
+    if args.model == Some(vicurve::model::ShapeModel::BsplineCurve) {
+        // `--dxf` and `--svg-curve` then write the fitted curve.
+        diagnostics?;
+        let (o, p) = (&args.outputs, path_text.as_str());
+        return crate::model_output::run_bspline_curve(o, &args.cad, p, &image, &init, &config, &m);
+    }
     let size = Some((image.width(), image.height()));
     let cad = args.cad.write(&m.curve_data(), &path_text, size);
     if let Some(model) = args.model {
         cad?;
+        diagnostics?;
         let (o, p) = (&args.outputs, path_text.as_str());
         return crate::model_output::run(model, o, p, &image, &init, &config, &m);
     }
-    write_outputs(&args.outputs, &path_text, &image, &init, &config, &m)?;
+    let written = (path_text.as_str(), &image, &init, &config, &m);
+    write_outputs_grown(&args.outputs, written, grown.as_ref())?;
     cad?;
+    diagnostics?;
     if !args.outputs.any() && !args.cad.any() {
         print_summary(&config, &m);
     }
@@ -235,6 +285,47 @@ fn start_config(args: &Args) -> Result<vicurve::start::StartConfig, Failure> {
     Ok(vicurve::start::StartConfig { pick, roi })
 }
 
+/// `--grow [LEN]`: grow the open start segment by segment, then measure.
+fn grow_from(
+    image: &Image,
+    init: &InitialCurve,
+    config: &FitConfig,
+    length: Option<f64>,
+) -> Result<Grown, Failure> {
+    if init.is_closed() {
+        return Err(Failure::Error(
+            "--grow extends the two ends of an open start: give --init segment:X0,Y0,X1,Y1 or an open polyline".into(),
+        ));
+    }
+    let sampler = Sampler::new(image, config.interpolation);
+    let settings = GrowConfig {
+        max_length: length,
+        ..GrowConfig::default()
+    };
+    let g = grow(&sampler, init.to_curve()?, config, &settings)?;
+    let kept = g.report.steps.iter().filter(|s| s.kept).count();
+    let why = |e: EndReason| match e {
+        EndReason::Border => "the image border",
+        EndReason::EdgeEnds => "the end of the edge",
+        EndReason::Length => "the length asked",
+        EndReason::Closed => "closure",
+        EndReason::MetUnclosed => "the other end (the loop did not converge)",
+        EndReason::StepLimit => "the step limit",
+        EndReason::StartFailed => "a start that did not converge",
+    };
+    let [a, b] = g.report.ends;
+    if a == EndReason::Closed {
+        eprintln!("vicurve: grown in {kept} step(s) into a closed curve");
+    } else {
+        eprintln!(
+            "vicurve: grown in {kept} step(s); the start stopped at {}, the end at {}",
+            why(a),
+            why(b)
+        );
+    }
+    Ok(g)
+}
+
 /// Parse `--init`; polylines are read from their file.
 pub fn parse_init(spec: &str, closed: bool) -> Result<InitialCurve, Failure> {
     if let Some(file) = spec.strip_prefix("polyline:") {
@@ -272,6 +363,7 @@ fn build_config(args: &Args) -> Result<FitConfig, Failure> {
         config.interpolation = parse_interp(i)?;
     }
     config.levels = parse_levels(&args.levels)?;
+    config.breaks = args.breaks.clone();
     config.validate()?;
     Ok(config)
 }
@@ -325,6 +417,25 @@ pub fn write_outputs(
     config: &FitConfig,
     m: &Measurement,
 ) -> Result<(), Failure> {
+    write_outputs_grown(args, (path_text, image, init, config, m), None)
+}
+
+/// What a measurement's outputs are made from: the input's name, the
+/// image, the start, the configuration and the measurement.
+type Written<'a> = (
+    &'a str,
+    &'a Image,
+    &'a InitialCurve,
+    &'a FitConfig,
+    &'a Measurement,
+);
+
+/// [`write_outputs`], with the record of a grown start (`--grow`).
+fn write_outputs_grown(
+    args: &Outputs,
+    (path_text, image, init, config, m): Written,
+    grown: Option<&GrowReport>,
+) -> Result<(), Failure> {
     let mut first_error: Option<String> = None;
     let mut note = |r: Result<(), String>| {
         if let Err(e) = r {
@@ -332,7 +443,9 @@ pub fn write_outputs(
         }
     };
     if let Some(p) = &args.out {
-        let record = ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
+        let mut record =
+            ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
+        record.grow = grown;
         note(write_json(p, &record));
     }
     if let Some(p) = &args.points {

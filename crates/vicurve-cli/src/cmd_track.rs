@@ -30,10 +30,12 @@ pub struct Args {
     #[arg(long)]
     pub stages: Option<String>,
     /// Stages of the frames started from the previous result: `default`
-    /// (the default schedule) or `R:N,...`. Default: those of the first
-    /// frame (`--stages`, else the default schedule, whose last, pixel-edge
-    /// stage is what makes a silhouette exact; `2:auto` is faster and less
-    /// accurate: see docs/benchmarks.md).
+    /// (the whole default schedule on every frame) or `R:N,...`. Default:
+    /// those of the first frame; when that is the default schedule, a
+    /// silhouette's frames run the tracking schedule (the pixel-edge stage
+    /// alone, from the previous frame's blur and elements; the default
+    /// schedule when it cannot measure a frame). `2:auto` is faster than
+    /// the default schedule but less accurate: see docs/benchmarks.md.
     #[arg(long)]
     pub track_stages: Option<String>,
     /// Degree of the B-splines (1 to 5).

@@ -16,15 +16,18 @@
 use crate::cmd_measure::overlay_layers;
 use crate::job::{AxisChoice, CurveSpec, Job, OverlayKind};
 use crate::output::{write_points_csv, ResultFile};
-use crate::resume::{rebuild, write_atomic};
+use crate::resume::{rebuild, tracking_state, write_atomic};
 use crate::summary::Row;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use vicurve::curve::{InitialCurve, SplineCurve};
 use vicurve::derived::{width_profile, WidthAxis};
-use vicurve::fit::{measure_from, FitConfig, Measurement, Outcome};
+use vicurve::fit::{
+    measure_from, measure_tracked_from, FitConfig, Measurement, Outcome, TrackState,
+};
 use vicurve::interp::{Interpolation, Sampler};
 use vicurve::Image;
 
@@ -37,11 +40,13 @@ const RECORD_SPACING: f64 = 2.0;
 /// 16 control intervals along the curve).
 const START_SPACING: f64 = 10.0;
 
-/// The last good curve of one curve of the job, and the frame it is from.
+/// The last good curve of one curve of the job, the frame it is from, and
+/// what the tracking schedule takes from it.
 #[derive(Clone)]
 pub struct Previous {
     pub curve: SplineCurve,
     pub stem: String,
+    pub state: Option<TrackState>,
 }
 
 /// The state a sequence carries from frame to frame.
@@ -74,13 +79,21 @@ impl Tracking {
     }
 
     /// Take the good curves of a frame (as written: see [`crate::resume`])
-    /// and fix the estimated axes that are not yet.
-    pub fn update(&mut self, job: &Job, stem: &str, good: &[Option<SplineCurve>]) {
-        for (slot, g) in self.last_good.iter_mut().zip(good) {
+    /// with their tracking states, and fix the estimated axes that are not
+    /// yet.
+    pub fn update(
+        &mut self,
+        job: &Job,
+        stem: &str,
+        good: &[Option<SplineCurve>],
+        states: &[Option<TrackState>],
+    ) {
+        for ((slot, g), state) in self.last_good.iter_mut().zip(good).zip(states) {
             if let Some(c) = g {
                 *slot = Some(Previous {
                     curve: c.clone(),
                     stem: stem.to_string(),
+                    state: *state,
                 });
             }
         }
@@ -190,6 +203,8 @@ pub struct FrameOutput {
     pub rows: Vec<Row>,
     /// The good curves as written (per curve of the job).
     pub good: Vec<Option<SplineCurve>>,
+    /// What the next frame's tracking schedule takes from them.
+    pub states: Vec<Option<TrackState>>,
     /// One line per problem, for the log.
     pub problems: Vec<String>,
 }
@@ -209,20 +224,20 @@ pub fn measure_frame(
         Err(e) => return unreadable(job, stem, &e.to_string()),
     };
     let path_text = path.display().to_string();
-    // One prepared image per interpolation in use (usually one).
-    let mut kinds: Vec<Interpolation> = Vec::new();
-    for c in &job.curves {
-        for k in [c.first.interpolation, c.tracked.interpolation] {
-            if !kinds.contains(&k) {
-                kinds.push(k);
-            }
-        }
-    }
-    let samplers: Vec<(Interpolation, Sampler)> = kinds
+    // One prepared image per interpolation, prepared when a fit first asks
+    // for it: the tracking schedule needs no interpolation (bilinear, the
+    // plain copy), and the cubic prefilter of a whole frame would cost more
+    // than its fit.
+    let samplers: Vec<(Interpolation, OnceLock<Sampler>)> = Interpolation::ALL
         .iter()
-        .map(|&k| (k, Sampler::new(&image, k)))
+        .map(|&k| (k, OnceLock::new()))
         .collect();
-    let sampler = |k: Interpolation| samplers.iter().find(|(kind, _)| *kind == k).map(|(_, s)| s);
+    let sampler = |k: Interpolation| {
+        samplers
+            .iter()
+            .find(|(kind, _)| *kind == k)
+            .map(|(_, s)| s.get_or_init(|| Sampler::new(&image, k)))
+    };
     // Curves are independent: measure them in parallel (each fit also
     // uses the thread pool for its bands and matrices).
     let results: Vec<CurveResult> = job
@@ -237,6 +252,7 @@ pub fn measure_frame(
 
     let mut rows = Vec::new();
     let mut good: Vec<Option<SplineCurve>> = vec![None; job.curves.len()];
+    let mut states: Vec<Option<TrackState>> = vec![None; job.curves.len()];
     let mut measured: Vec<Option<&Measurement>> = vec![None; job.curves.len()];
     let mut problems = Vec::new();
     for (i, (spec, r)) in job.curves.iter().zip(&results).enumerate() {
@@ -295,6 +311,7 @@ pub fn measure_frame(
                 // Go on from the curve as written (see `resume`).
                 match rebuild(&m.curve_data()) {
                     Ok(c) => {
+                        states[i] = tracking_state(m, &c);
                         good[i] = Some(c);
                         measured[i] = Some(m);
                     }
@@ -362,6 +379,7 @@ pub fn measure_frame(
     FrameOutput {
         rows,
         good,
+        states,
         problems,
     }
 }
@@ -378,14 +396,17 @@ fn unreadable(job: &Job, stem: &str, reason: &str) -> FrameOutput {
     FrameOutput {
         rows,
         good: vec![None; job.curves.len()],
+        states: vec![None; job.curves.len()],
         problems: vec![format!("{stem}: {reason}")],
     }
 }
 
 /// Measure one curve: from the previous frame's result with the tracked
-/// configuration, or from its start with the first; a tracked fit that
-/// fails is tried again from the same curve with the first frame's
-/// configuration when the two differ.
+/// configuration (the tracking schedule first when the spec asks for it
+/// and the previous frame left a state; the tracked configuration's own
+/// schedule when that cannot measure), or from its start with the first; a
+/// tracked fit that fails is tried again from the same curve with the first
+/// frame's configuration when the two differ.
 fn measure_curve<'s>(
     spec: &CurveSpec,
     prev: Option<&Previous>,
@@ -428,7 +449,18 @@ fn measure_curve<'s>(
                     };
                 }
             };
-            let first = run(start.clone(), &spec.tracked);
+            let short = match (spec.tracking_schedule, &p.state) {
+                (true, Some(state)) => sampler(Interpolation::Bilinear).and_then(|s| {
+                    measure_tracked_from(s, start.clone(), state, &spec.tracked)
+                        .ok()
+                        .flatten()
+                }),
+                _ => None,
+            };
+            let first = match short {
+                Some(m) => Ok(m),
+                None => run(start.clone(), &spec.tracked),
+            };
             let failed = match &first {
                 Err(e) => Some(e.clone()),
                 Ok(m) => match m.outcome {

@@ -35,13 +35,18 @@
 //! Unknown keys are errors (a misspelt option is not silently ignored).
 //!
 //! Frames started from the previous frame's result use the first frame's
-//! stages unless a curve says otherwise (`track_stages`; `"default"` is the
-//! default schedule). A tracked start is already within a fraction of a
-//! pixel of the edge, so the coarse bands (20, 10, 5 px) have little to do
-//! (a few iterations each), but only the default schedule ends with the
-//! pixel-edge stage and the settled last stage that make a silhouette
-//! exact: with `2:auto` alone, the example's 8 frames take 0.35 s instead of
-//! 0.83 s and the width of the synthetic necking specimen is off by 0.06 to
+//! stages unless a curve says otherwise (`track_stages`). When those are
+//! the default schedule (no `stages`, no `track_stages`), a silhouette's
+//! tracked frames run the *tracking schedule*
+//! ([`vicurve::fit::measure_tracked_from`]): the pixel-edge stage alone,
+//! from the previous frame's blur and elements, on the image without
+//! interpolation; a frame it cannot measure (the previous one did not end
+//! with a pixel-edge stage, or the stage fails) gets the whole default
+//! schedule. `track_stages = "default"` forces the whole default schedule
+//! on every frame (the coarse bands, 20, 10 and 5 px, then re-estimate the
+//! blur and elements from scratch); `track_stages = "R:N,..."` gives
+//! explicit stages, which end without the pixel-edge stage: with `2:auto`
+//! alone the width of the synthetic necking specimen is off by 0.06 to
 //! 0.14 px instead of under 0.01 (docs/benchmarks.md, "Sequences").
 
 use crate::cmd_measure::{parse_init, parse_interp, parse_polarity};
@@ -161,6 +166,9 @@ pub struct CurveSpec {
     pub first: FitConfig,
     /// Configuration of frames started from the previous frame's result.
     pub tracked: FitConfig,
+    /// Whether those frames run the tracking schedule first (see the
+    /// [module docs](self)), `tracked` being the fallback.
+    pub tracking_schedule: bool,
 }
 
 /// How the axis of a width profile is chosen.
@@ -332,6 +340,10 @@ pub fn curve_spec(c: &CurveFile, index: usize, base: &Path) -> Result<CurveSpec,
         Some(s) => Some(parse_stages(s).map_err(|e| context(e.into()))?),
         None => first.stages.clone(),
     };
+    let tracking_schedule = c.track_stages.is_none()
+        && first.stages.is_none()
+        && kind == Kind::Silhouette
+        && first.blur_correction;
     first.validate().map_err(|e| context(e.into()))?;
     tracked.validate().map_err(|e| context(e.into()))?;
     Ok(CurveSpec {
@@ -339,6 +351,7 @@ pub fn curve_spec(c: &CurveFile, index: usize, base: &Path) -> Result<CurveSpec,
         init,
         first,
         tracked,
+        tracking_schedule,
     })
 }
 

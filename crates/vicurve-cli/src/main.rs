@@ -17,6 +17,8 @@ mod cmd_mesh;
 mod cmd_run;
 mod cmd_synth;
 mod cmd_track;
+mod diagnostics;
+mod diagnostics_png;
 mod frame;
 mod job;
 mod model_output;

@@ -9,6 +9,7 @@ use crate::Failure;
 use serde::Serialize;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{FitConfig, Measurement, Outcome};
+use vicurve::model::bspline_curve::{measure_bspline_curve, BsplineCurveConfig, BsplineCurveFit};
 use vicurve::model::{measure_model, ModelConfig, ModelFit, ModelProfile, ShapeModel};
 use vicurve::Image;
 
@@ -93,6 +94,97 @@ pub fn run(
         }
         Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
             "the {model} fit diverged: {divergence}"
+        ))),
+    }
+}
+
+/// The record of `measure --model bspline-curve`: as [`WithModel`].
+#[derive(Serialize)]
+struct WithCurve<'a> {
+    #[serde(flatten)]
+    result: ResultFile<'a>,
+    model: &'a BsplineCurveFit,
+}
+
+/// `--model bspline-curve`: the free B-spline curve fitted on the
+/// measurement `m`; `--points` and the overlays show its samples, `--out`
+/// adds it as `model`, `--dxf` / `--svg-curve` export it. Exit status as
+/// [`run`].
+#[allow(clippy::too_many_arguments)]
+pub fn run_bspline_curve(
+    outputs: &Outputs,
+    cad: &crate::cmd_export::CurveFiles,
+    path_text: &str,
+    image: &Image,
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+) -> Result<(), Failure> {
+    let fit = measure_bspline_curve(image, m, config, &BsplineCurveConfig::default())?;
+    let size = (image.width(), image.height());
+    let cad_written = cad.write(&fit.curve, path_text, Some(size));
+    let mut shown = m.clone();
+    shown.samples = fit.samples(config.sample_spacing)?;
+    let others = Outputs {
+        out: None,
+        points: outputs.points.clone(),
+        svg: outputs.svg.clone(),
+        png: outputs.png.clone(),
+        png_scale: outputs.png_scale,
+    };
+    let written = write_outputs(&others, path_text, image, init, config, &shown);
+    let json = match &outputs.out {
+        Some(p) => {
+            let record = WithCurve {
+                result: ResultFile::new(path_text, size, init, config, &shown),
+                model: &fit,
+            };
+            write_json(p, &record).map_err(Failure::Error)
+        }
+        None => Ok(()),
+    };
+    let any = outputs.out.is_some()
+        || outputs.points.is_some()
+        || outputs.svg.is_some()
+        || outputs.png.is_some();
+    if !any {
+        print_summary(config, m);
+    }
+    let sigmas: Vec<f64> = fit.control_points.iter().map(|p| p.sigma_n).collect();
+    let max_sigma = sigmas.iter().copied().fold(0.0, f64::max);
+    let rms_sigma = (sigmas.iter().map(|s| s * s).sum::<f64>() / sigmas.len().max(1) as f64).sqrt();
+    println!(
+        "model:       bspline-curve ({}, {} iterations, {} band pixels)",
+        fit.outcome, fit.iterations, fit.band_pixels
+    );
+    println!(
+        "  curve:    degree {}, {} control points {:.2} px apart, {}",
+        fit.curve.degree,
+        fit.control_points.len(),
+        fit.control_spacing,
+        if fit.curve.closed { "closed" } else { "open" }
+    );
+    println!(
+        "  sigma:    {rms_sigma:.2e} px RMS, {max_sigma:.2e} px at most (control points, along the normal)"
+    );
+    println!(
+        "  residual: {:.3e} (RMS gray level); gray levels a = {:.4}, c = {:+.4}",
+        fit.residual_rms, fit.a, fit.c
+    );
+    written?;
+    json?;
+    cad_written?;
+    finish(m)?;
+    match fit.outcome {
+        Outcome::Converged => Ok(()),
+        Outcome::IterationLimit => {
+            eprintln!(
+                "vicurve: warning: the bspline-curve fit reached its iteration limit before converging"
+            );
+            Ok(())
+        }
+        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
+            "the bspline-curve fit diverged: {divergence}"
         ))),
     }
 }

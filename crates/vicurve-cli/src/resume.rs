@@ -21,7 +21,9 @@ use crate::job::WidthSpec;
 use serde::Serialize;
 use std::path::Path;
 use vicurve::curve::{SplineCurve, SplineCurveData};
+use vicurve::fit::{Measurement, Outcome, TrackState};
 use vicurve::spline::Basis;
+use vicurve::virtual_image::Profile;
 
 /// Write `bytes` to `path` through a temporary file in the same folder and
 /// a rename: readers (and a later run) see the old file or the new one,
@@ -119,6 +121,9 @@ pub struct Recorded {
     pub good: bool,
     /// The measured curve (as written).
     pub curve: SplineCurve,
+    /// What the next frame's tracking schedule takes from this one
+    /// ([`tracking_state`] of the recorded last stage).
+    pub state: Option<TrackState>,
 }
 
 /// Read a curve's JSON written by this job (`fingerprint`) for the frame
@@ -134,10 +139,36 @@ pub fn read_recorded(path: &Path, fingerprint: &str, input: &str) -> Option<Reco
     let status = v["outcome"]["status"].as_str()?;
     let data: SplineCurveData = serde_json::from_value(v["curve"].clone()).ok()?;
     let curve = rebuild(&data).ok()?;
+    let last = v["stages"].as_array().and_then(|s| s.last());
+    let state = last.and_then(|last| {
+        let profile: Profile = serde_json::from_value(last["profile"].clone()).ok()?;
+        let outcome: Outcome = serde_json::from_value(last["outcome"].clone()).ok()?;
+        let elements = usize::try_from(last["elements"].as_u64()?).ok()?;
+        let vary = v["gray_levels"]["along"]
+            .as_array()
+            .is_some_and(|a| !a.is_empty());
+        TrackState::from_last_stage(profile, elements, outcome, curve.param_length(), vary)
+    });
     Some(Recorded {
         good: status == "converged" || status == "iteration_limit",
         curve,
+        state,
     })
+}
+
+/// What the frame after `m` takes from it for the tracking schedule, `m`'s
+/// curve being `written` as read back ([`rebuild`]): computed as
+/// [`read_recorded`] does from the JSON, so that a resumed run goes on
+/// exactly as an uninterrupted one.
+pub fn tracking_state(m: &Measurement, written: &SplineCurve) -> Option<TrackState> {
+    let last = m.stages.last()?;
+    TrackState::from_last_stage(
+        last.profile,
+        last.elements,
+        last.outcome,
+        written.param_length(),
+        !m.levels.is_empty(),
+    )
 }
 
 #[cfg(test)]

@@ -26,6 +26,8 @@ use std::collections::HashMap;
 use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
+use vicurve::curve::SplineCurve;
+use vicurve::fit::TrackState;
 
 /// `DIR/summary.csv`.
 pub const SUMMARY_STEM: &str = "summary";
@@ -111,8 +113,8 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
     for (i, (path, stem)) in job.images.iter().zip(&stems).enumerate() {
         let files = FrameFiles::new(job, stem);
         if done[i] {
-            if let Some(good) = read_done(job, &fingerprint, path, &files) {
-                tracking.update(job, stem, &good);
+            if let Some((good, states)) = read_done(job, &fingerprint, path, &files) {
+                tracking.update(job, stem, &good, &states);
                 lines[i] = old_rows.remove(stem).unwrap_or_default();
                 skipped += 1;
                 continue;
@@ -122,7 +124,7 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         }
         let started = Instant::now();
         let out = measure_frame(job, &fingerprint, i, path, &files, &tracking);
-        tracking.update(job, stem, &out.good);
+        tracking.update(job, stem, &out.good, &out.states);
         lines[i] = out.rows.iter().map(|r| r.to_line()).collect();
         measured += 1;
         for p in &out.problems {
@@ -203,26 +205,30 @@ fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
     out
 }
 
+/// A done frame's good curves and their tracking states, per curve of the
+/// job.
+type DoneCurves = (Vec<Option<SplineCurve>>, Vec<Option<TrackState>>);
+
 /// A done frame's curves as written, `None` if any JSON is unusable.
-fn read_done(
-    job: &Job,
-    fingerprint: &str,
-    path: &Path,
-    files: &FrameFiles,
-) -> Option<Vec<Option<vicurve::curve::SplineCurve>>> {
+fn read_done(job: &Job, fingerprint: &str, path: &Path, files: &FrameFiles) -> Option<DoneCurves> {
     let input = path.display().to_string();
-    job.curves
+    let recorded: Vec<_> = job
+        .curves
         .iter()
-        .map(|c| {
-            read_recorded(&files.json(&c.name), fingerprint, &input).map(|r| {
+        .map(|c| read_recorded(&files.json(&c.name), fingerprint, &input))
+        .collect::<Option<_>>()?;
+    Some(
+        recorded
+            .into_iter()
+            .map(|r| {
                 if r.good {
-                    Some(r.curve)
+                    (Some(r.curve), r.state)
                 } else {
-                    None
+                    (None, None)
                 }
             })
-        })
-        .collect()
+            .unzip(),
+    )
 }
 
 fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {

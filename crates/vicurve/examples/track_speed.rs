@@ -9,20 +9,26 @@
 //! The frames (1000x1000, 8-bit PNG, a five-lobed star of mean radius 318
 //! px and perimeter about 2030 px, moving 0.3 px and turning 0.2 degree per
 //! frame, blur 1, noise 1 %) are rendered once into the temporary folder.
-//! For each schedule (`default`, the default schedule that `track` uses, or
-//! `R:N,...` as `--stages`, optionally followed by `/bilinear` or `/keys`
-//! for another interpolation than the cubic B-spline; default list:
-//! `default default/bilinear 2:auto 2:40px 2:40px/bilinear`) the frames are
-//! tracked from the previous curve smoothed as `track` does it, and timed:
-//! decode, preparation (the cubic prefilter), the fit; frames per second
-//! with and without the decode, and the largest distance to the exact star
-//! over all samples of all frames. `TRACK_SPEED_VERBOSE=1` prints every
-//! frame's stages.
+//! For each schedule (`tracked`, the tracking schedule that `track` uses by
+//! default: the pixel-edge stage alone from the previous frame's blur and
+//! elements, [`vicurve::fit::measure_tracked_from`], on an image prepared
+//! without interpolation, falling back to the default schedule when it
+//! cannot measure; `default`, the full default schedule; or `R:N,...` as
+//! `--stages`; optionally followed by `/bilinear` or `/keys` for another
+//! interpolation than the cubic B-spline; default list: `tracked default
+//! default/bilinear 2:auto 2:40px 2:40px/bilinear`) the frames are tracked
+//! from the previous curve smoothed as `track` does it, and timed: decode,
+//! preparation (the cubic prefilter, or the plain copy of the tracking
+//! schedule), the fit; frames per second with and without the decode, and
+//! the largest distance to the exact star over all samples of all frames.
+//! `TRACK_SPEED_VERBOSE=1` prints every frame's stages.
 
 use std::time::Instant;
 use vicurve::curve::{InitialCurve, SplineCurve};
-use vicurve::fit::{measure, measure_from, parse_stages, FitConfig};
-use vicurve::interp::Sampler;
+use vicurve::fit::{
+    measure, measure_from, measure_tracked_from, parse_stages, FitConfig, TrackState,
+};
+use vicurve::interp::{Interpolation, Sampler};
 use vicurve::render::{render, Method, RenderSpec};
 use vicurve::truth::{evaluate, Kind, Shape};
 
@@ -45,6 +51,7 @@ fn main() {
         args[1..].to_vec()
     } else {
         [
+            "tracked",
             "default",
             "default/bilinear",
             "2:auto",
@@ -107,7 +114,8 @@ fn main() {
             Some((a, b)) => (a, Some(b)),
             None => (sched.as_str(), None),
         };
-        if sched_text != "default" {
+        let tracked = sched_text == "tracked";
+        if sched_text != "default" && !tracked {
             config.stages = Some(parse_stages(sched_text).unwrap());
         }
         if let Some(i) = interp {
@@ -117,12 +125,19 @@ fn main() {
         let mut iterations = 0;
         let mut worst: f64 = 0.0;
         let mut curve = m0.curve.clone();
+        let mut state = TrackState::from_measurement(&m0);
+        let mut fallbacks = 0;
         for k in 1..=frames {
             let t = Instant::now();
             let img = vicurve::io::load_image(&path(k)).unwrap();
             decode += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let sampler = Sampler::new(&img, config.interpolation);
+            // The tracking schedule reads pixel values only: no prefilter.
+            let kind = match (tracked, state) {
+                (true, Some(_)) => Interpolation::Bilinear,
+                _ => config.interpolation,
+            };
+            let sampler = Sampler::new(&img, kind);
             prepare += t.elapsed().as_secs_f64();
             let t = Instant::now();
             // The start as `vicurve track` makes it: the previous curve
@@ -135,7 +150,21 @@ fn main() {
                 .collect();
             let spacing = (curve.param_length() / 16.0).clamp(2.0, 10.0);
             let start = SplineCurve::fit(&pts, true, 3, spacing).unwrap();
-            let m = measure_from(&sampler, start, &config).unwrap();
+            let attempt = match (tracked, &state) {
+                (true, Some(st)) => {
+                    measure_tracked_from(&sampler, start.clone(), st, &config).unwrap()
+                }
+                _ => None,
+            };
+            let m = match attempt {
+                Some(m) => m,
+                None if kind != config.interpolation => {
+                    fallbacks += 1;
+                    let full = Sampler::new(&img, config.interpolation);
+                    measure_from(&full, start, &config).unwrap()
+                }
+                None => measure_from(&sampler, start, &config).unwrap(),
+            };
             fit += t.elapsed().as_secs_f64();
             iterations += m.iterations();
             let e = evaluate(&m.points(), &star(k)).unwrap();
@@ -161,7 +190,11 @@ fn main() {
                 );
             }
             assert!(m.outcome.is_converged(), "frame {k}: {}", m.outcome);
+            state = TrackState::from_measurement(&m);
             curve = m.curve;
+        }
+        if fallbacks > 0 {
+            println!("  ({fallbacks} frames measured again with the default schedule)");
         }
         let n = frames as f64;
         println!(

@@ -335,6 +335,8 @@ impl Band {
         }
         let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
         let weight = thin_weight(thin);
+        // Pixels that see both sides of a corner (see `curve/corners.rs`).
+        let clearances = curve.corner_clearances();
         (0..gh)
             .into_par_iter()
             .map(|j| {
@@ -353,6 +355,12 @@ impl Band {
                     let pr = curve.project(x, y, f64::from(u0));
                     let jacobian = 1.0 - pr.curvature * pr.r;
                     if pr.at_end || pr.r.abs() >= half_width || jacobian <= MIN_JACOBIAN {
+                        continue;
+                    }
+                    if clearances
+                        .iter()
+                        .any(|(v, radius)| (x - v[0]).hypot(y - v[1]) < *radius)
+                    {
                         continue;
                     }
                     let mut values = [0.0; MAX_DEGREE + 1];

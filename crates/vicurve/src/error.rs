@@ -50,6 +50,13 @@ pub enum Error {
         /// Why, and what to try.
         reason: String,
     },
+    /// No line could be followed from the picked point for a contour's
+    /// automatic start ([`crate::start::ridge`]).
+    #[error("no line found: {reason}")]
+    NoLine {
+        /// Why, and what to try.
+        reason: String,
+    },
     /// An image with no pixel.
     #[error("the image is empty ({width}x{height} pixels)")]
     EmptyImage {

@@ -11,6 +11,7 @@
 pub mod band;
 pub mod curve;
 pub mod derived;
+pub mod diagnostics;
 pub mod error;
 pub mod export;
 pub mod fit;

@@ -22,6 +22,7 @@
 
 use crate::curve::{InitialCurve, SplineCurveData};
 use crate::derived::Derived;
+use crate::fit::grow::GrowReport;
 use crate::fit::{FitConfig, LevelSample, Measurement, Outcome, StageReport};
 use crate::psf::EdgeSpread;
 use crate::virtual_image::Kind;
@@ -71,6 +72,10 @@ pub struct ResultFile<'a> {
     pub stages: &'a [StageReport],
     /// Stages of the default schedule that were skipped, with the reason.
     pub skipped_stages: &'a [String],
+    /// How the curve grew from a short start ([`crate::fit::grow`]);
+    /// absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grow: Option<&'a GrowReport>,
 }
 
 /// The input image.
@@ -152,6 +157,7 @@ impl<'a> ResultFile<'a> {
             samples: m.samples.len(),
             stages: &m.stages,
             skipped_stages: &m.skipped,
+            grow: None,
         }
     }
 

@@ -16,6 +16,16 @@
 //! `e, e + 1, ..., e + p` (modulo `n` when periodic): [`Basis::eval`] returns
 //! `e` and the `p + 1` values.
 //!
+//! # Breaks (repeated knots)
+//! [`Basis::with_breaks`] repeats knots at chosen parameters, lowering the
+//! continuity there to `C^(p - m)` for a knot of multiplicity `m` (a corner
+//! at `m = p`, independent sides at `m = p + 1`). Each break lies exactly on
+//! an element boundary: the stretches between breaks get uniform elements
+//! of about the requested length (see [`knots`] for the layout and the
+//! indexing, which keeps the contract above: first index plus `p + 1`
+//! values, half-bandwidth `p`). A basis without breaks is the uniform one,
+//! evaluated by the same fast path as before.
+//!
 //! ```
 //! use vicurve::spline::Basis;
 //! let basis = Basis::new(3, 10, 100.0, false).unwrap();
@@ -28,6 +38,11 @@
 
 use crate::error::{Error, Result};
 
+pub mod knots;
+
+pub use knots::Break;
+use knots::{horner, Knotted};
+
 /// Largest degree supported.
 pub const MAX_DEGREE: usize = 5;
 
@@ -39,6 +54,9 @@ pub struct Basis {
     length: f64,
     closed: bool,
     h: f64,
+    n_fn: usize,
+    /// `None` for the uniform basis (the fast path).
+    knotted: Option<Box<Knotted>>,
 }
 
 /// Values and derivatives of the `p + 1` non-zero functions at a point,
@@ -94,7 +112,119 @@ impl Basis {
             length,
             closed,
             h: length / n_el as f64,
+            n_fn: if closed { n_el } else { n_el + degree },
+            knotted: None,
         })
+    }
+
+    /// A basis of `degree` on `[0, length]` with repeated knots at
+    /// `breaks` and elements of about `length / n_el` pixels between them
+    /// (see [`knots`]); the element count is what that makes (at least one
+    /// element between consecutive breaks). Without breaks this is
+    /// [`Basis::new`].
+    ///
+    /// Errors ([`Error::InvalidParameter`]): those of [`Basis::new`]; a
+    /// break that is not finite, not strictly inside `(0, L)` (open) or in
+    /// `[0, L)` (closed), a multiplicity outside `1..=p + 1`, two breaks at
+    /// the same parameter; a closed basis with fewer than `p + 1` functions.
+    pub fn with_breaks(
+        degree: usize,
+        n_el: usize,
+        length: f64,
+        closed: bool,
+        breaks: &[Break],
+    ) -> Result<Self> {
+        let uniform = Basis::new(degree, n_el, length, closed)?;
+        if breaks.is_empty() {
+            return Ok(uniform);
+        }
+        let mut sorted = breaks.to_vec();
+        sorted.sort_by(|a, b| a.at.total_cmp(&b.at));
+        for b in &sorted {
+            let inside = if closed {
+                (0.0..length).contains(&b.at)
+            } else {
+                b.at > 0.0 && b.at < length
+            };
+            if !(b.at.is_finite() && inside) {
+                return Err(Error::invalid(
+                    "break",
+                    format!(
+                        "{} px (must lie inside the curve, length {length} px)",
+                        b.at
+                    ),
+                ));
+            }
+            if !(1..=degree + 1).contains(&b.multiplicity) {
+                return Err(Error::invalid(
+                    "break multiplicity",
+                    format!("{} (must be 1 to {})", b.multiplicity, degree + 1),
+                ));
+            }
+        }
+        if let Some(w) = sorted.windows(2).find(|w| w[0].at == w[1].at) {
+            return Err(Error::invalid(
+                "break",
+                format!("{} px given twice", w[0].at),
+            ));
+        }
+        let k = Knotted::new(degree, uniform.h, length, closed, &sorted);
+        if closed && k.n_functions < degree + 1 {
+            return Err(Error::invalid(
+                "elements",
+                format!("too few for a closed curve of degree {degree}"),
+            ));
+        }
+        Ok(Basis {
+            n_el: k.n_elements(),
+            h: length / k.n_elements() as f64,
+            n_fn: k.n_functions,
+            knotted: Some(Box::new(k)),
+            ..uniform
+        })
+    }
+
+    /// The repeated knots, sorted (empty for a uniform basis).
+    pub fn breaks(&self) -> &[Break] {
+        self.knotted.as_ref().map_or(&[], |k| &k.breaks)
+    }
+
+    /// Start and length of element `e` (pixels).
+    #[inline]
+    pub fn element_bounds(&self, e: usize) -> (f64, f64) {
+        match &self.knotted {
+            None => (e as f64 * self.h, self.h),
+            Some(k) => k.bounds(e),
+        }
+    }
+
+    /// [`Basis::locate`], except that a parameter on an element boundary
+    /// belongs to the element that ends there (`t = 1`): the left-hand
+    /// limit at a break. The first element keeps `s = 0` of an open basis.
+    pub fn locate_left(&self, s: f64) -> (usize, f64) {
+        let (e, t) = self.locate(s);
+        if t > 0.0 {
+            return (e, t);
+        }
+        if e > 0 {
+            (e - 1, 1.0)
+        } else if self.closed {
+            (self.n_el - 1, 1.0)
+        } else {
+            (e, t)
+        }
+    }
+
+    /// The first function of element `e` and the power-basis coefficients
+    /// of its `p + 1` functions in the local coordinate `t` in `[0, 1]`.
+    pub fn element_polynomials(
+        &self,
+        e: usize,
+    ) -> (usize, [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]) {
+        match &self.knotted {
+            None => (e, cardinal_polynomials(self.degree)),
+            Some(k) => (k.el_first[e], k.pieces[e]),
+        }
     }
 
     /// Degree `p`.
@@ -117,26 +247,24 @@ impl Basis {
         self.closed
     }
 
-    /// Element length `h = L / n_el`, pixels.
+    /// Element length `h = L / n_el`, pixels (the mean element length of a
+    /// basis with breaks).
     pub fn element_length(&self) -> f64 {
         self.h
     }
 
     /// Number of functions: `n_el + p` (open) or `n_el` (periodic).
+    /// With breaks, each knot of multiplicity `m` adds `m - 1`.
     pub fn n_functions(&self) -> usize {
-        if self.closed {
-            self.n_el
-        } else {
-            self.n_el + self.degree
-        }
+        self.n_fn
     }
 
     /// Global index of the function `first + k` (wraps for periodic bases).
     #[inline]
     pub fn index(&self, first: usize, k: usize) -> usize {
         let i = first + k;
-        if self.closed && i >= self.n_el {
-            i - self.n_el
+        if self.closed && i >= self.n_fn {
+            i - self.n_fn
         } else {
             i
         }
@@ -147,7 +275,17 @@ impl Basis {
     /// unwrapped vector of `n_el + 2p + 1` knots `(i - p) h` on which the
     /// first `p` control values are repeated at the end (the standard way to
     /// hand a periodic spline to other software).
+    /// With breaks, the same form with the repeated knots.
     pub fn knots(&self) -> Vec<f64> {
+        if let Some(k) = &self.knotted {
+            let p = self.degree as isize;
+            let count = if self.closed {
+                self.n_fn + 2 * self.degree + 1
+            } else {
+                self.n_fn + self.degree + 1
+            };
+            return (0..count as isize).map(|i| k.knot(i - p)).collect();
+        }
         let count = self.n_el + 2 * self.degree + 1;
         (0..count)
             .map(|i| (i as f64 - self.degree as f64) * self.h)
@@ -158,6 +296,21 @@ impl Basis {
     /// Open bases clamp `s` to `[0, L]`; periodic ones wrap it.
     #[inline]
     pub fn locate(&self, s: f64) -> (usize, f64) {
+        if let Some(k) = &self.knotted {
+            let l = self.length;
+            let mut s = s;
+            if self.closed {
+                if !(0.0..l).contains(&s) {
+                    s = s.rem_euclid(l);
+                    if s >= l {
+                        s = 0.0;
+                    }
+                }
+            } else {
+                s = s.clamp(0.0, l);
+            }
+            return k.locate(s);
+        }
         let n = self.n_el as f64;
         let mut u = s / self.h;
         if self.closed {
@@ -186,6 +339,13 @@ impl Basis {
     #[inline]
     pub fn eval(&self, s: f64, values: &mut [f64; MAX_DEGREE + 1]) -> usize {
         let (e, t) = self.locate(s);
+        if let Some(k) = &self.knotted {
+            let pieces = &k.pieces[e];
+            for (v, c) in values.iter_mut().zip(pieces).take(self.degree + 1) {
+                *v = horner(c, self.degree, t).0;
+            }
+            return k.el_first[e];
+        }
         cardinal_values(self.degree, t, values);
         e
     }
@@ -193,7 +353,27 @@ impl Basis {
     /// Values and first and second derivatives at `s`.
     pub fn eval_derivs(&self, s: f64) -> BasisValues {
         let (e, t) = self.locate(s);
+        self.eval_derivs_at(e, t)
+    }
+
+    /// [`Basis::eval_derivs`] on element `e` at local coordinate `t` (with
+    /// [`Basis::locate_left`]: the left-hand limits at a break).
+    pub fn eval_derivs_at(&self, e: usize, t: f64) -> BasisValues {
         let p = self.degree;
+        if let Some(k) = &self.knotted {
+            let inv = 1.0 / k.el_len[e];
+            let mut out = BasisValues {
+                first: k.el_first[e],
+                ..Default::default()
+            };
+            for (i, c) in k.pieces[e].iter().enumerate().take(p + 1) {
+                let (v, d1, d2) = horner(c, p, t);
+                out.value[i] = v;
+                out.d1[i] = d1 * inv;
+                out.d2[i] = d2 * inv * inv;
+            }
+            return out;
+        }
         let mut out = BasisValues {
             first: e,
             ..Default::default()

@@ -130,3 +130,196 @@ fn invalid_bases_are_errors() {
     assert!(Basis::new(3, 4, f64::NAN, true).is_err());
     assert!(Basis::new(3, 4, -1.0, false).is_err());
 }
+
+// ---------------------------------------------------------------------------
+// Bases with breaks (repeated knots): against an independent Cox–de Boor
+// evaluation on the explicit knot vector `Basis::knots`.
+
+use vicurve::spline::Break;
+
+/// `N_{i,p}(s)` on the explicit knot vector `xi` by the recursive
+/// definition (half-open spans; 0/0 taken as 0).
+fn cox_de_boor(xi: &[f64], i: usize, p: usize, s: f64) -> f64 {
+    if p == 0 {
+        return if xi[i] <= s && s < xi[i + 1] {
+            1.0
+        } else {
+            0.0
+        };
+    }
+    let mut out = 0.0;
+    let d0 = xi[i + p] - xi[i];
+    if d0 > 0.0 {
+        out += (s - xi[i]) / d0 * cox_de_boor(xi, i, p - 1, s);
+    }
+    let d1 = xi[i + p + 1] - xi[i + 1];
+    if d1 > 0.0 {
+        out += (xi[i + p + 1] - s) / d1 * cox_de_boor(xi, i + 1, p - 1, s);
+    }
+    out
+}
+
+/// Function `i` of `basis` at `s` from its knot vector: for a closed basis
+/// the unwrapped vector, on which functions `i` and `i + n` (`i < p`) are
+/// the same periodic function.
+fn knot_oracle(basis: &Basis, i: usize, s: f64) -> f64 {
+    let xi = basis.knots();
+    let p = basis.degree();
+    let n = basis.n_functions();
+    let mut v = cox_de_boor(&xi, i, p, s);
+    if basis.is_closed() && i < p {
+        v += cox_de_boor(&xi, i + n, p, s);
+    }
+    v
+}
+
+fn broken_strategy() -> impl Strategy<Value = (Basis, f64)> {
+    (
+        1usize..=MAX_DEGREE,
+        1usize..30,
+        1.0f64..500.0,
+        any::<bool>(),
+        prop::collection::vec((0.0f64..1.0, 0usize..=MAX_DEGREE), 1..4),
+        0.0f64..1.0,
+    )
+        .prop_filter_map("valid breaks", |(p, n, l, closed, raw, t)| {
+            let mut breaks: Vec<Break> = raw
+                .iter()
+                .map(|&(f, m)| Break {
+                    at: if closed { f * l } else { (0.01 + 0.98 * f) * l },
+                    multiplicity: 1 + m % (p + 1),
+                })
+                .collect();
+            breaks.sort_by(|a, b| a.at.total_cmp(&b.at));
+            if breaks.windows(2).any(|w| w[1].at - w[0].at < 1e-3 * l) {
+                return None;
+            }
+            Basis::with_breaks(p, n, l, closed, &breaks)
+                .ok()
+                .map(|b| (b, t * l * 0.999_999))
+        })
+}
+
+/// The values of all functions at `s` as a dense vector.
+fn dense(basis: &Basis, first: usize, v: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; basis.n_functions()];
+    for (k, x) in v.iter().enumerate().take(basis.degree() + 1) {
+        out[basis.index(first, k)] += x;
+    }
+    out
+}
+
+proptest! {
+    #[test]
+    fn broken_values_match_cox_de_boor((basis, s) in broken_strategy()) {
+        let mut v = [0.0; MAX_DEGREE + 1];
+        let first = basis.eval(s, &mut v);
+        for (i, d) in dense(&basis, first, &v).iter().enumerate() {
+            let o = knot_oracle(&basis, i, s);
+            prop_assert!((d - o).abs() < 1e-9, "N_{i}({s}) = {d}, oracle {o}, knots {:?}", basis.knots());
+        }
+    }
+
+    #[test]
+    fn broken_partition_of_unity((basis, s) in broken_strategy()) {
+        let mut v = [0.0; MAX_DEGREE + 1];
+        basis.eval(s, &mut v);
+        let sum: f64 = v[..=basis.degree()].iter().sum();
+        prop_assert!((sum - 1.0).abs() < 1e-12);
+        prop_assert!(v[..=basis.degree()].iter().all(|x| *x >= -1e-14));
+    }
+
+    #[test]
+    fn broken_derivatives_match_finite_differences((basis, s) in broken_strategy()) {
+        let (e, t) = basis.locate(s);
+        let (start, len) = basis.element_bounds(e);
+        let s = start + t.clamp(0.1, 0.9) * len;
+        let d = basis.eval_derivs(s);
+        let eps = 1e-4 * len;
+        let lo = basis.eval_derivs(s - eps);
+        let hi = basis.eval_derivs(s + eps);
+        prop_assert_eq!(lo.first, d.first);
+        prop_assert_eq!(hi.first, d.first);
+        for k in 0..=basis.degree() {
+            let fd1 = (hi.value[k] - lo.value[k]) / (2.0 * eps);
+            prop_assert!((fd1 - d.d1[k]).abs() < 1e-6 / len, "d1 {k}: {fd1} vs {}", d.d1[k]);
+            if basis.degree() >= 2 {
+                let fd2 = (hi.d1[k] - lo.d1[k]) / (2.0 * eps);
+                prop_assert!((fd2 - d.d2[k]).abs() < 1e-5 / (len * len), "d2 {k}: {fd2} vs {}", d.d2[k]);
+            }
+        }
+    }
+
+    /// At a knot of multiplicity m the functions are C^(p - m): derivatives
+    /// of order up to p - m agree from both sides, and (when that order is
+    /// one we evaluate) the next one jumps for some function.
+    #[test]
+    fn continuity_at_a_break((basis, _s) in broken_strategy()) {
+        let p = basis.degree();
+        for b in basis.breaks() {
+            let (el, tl) = basis.locate_left(b.at);
+            let left = basis.eval_derivs_at(el, tl);
+            let right = basis.eval_derivs(b.at);
+            let (h, _) = (basis.element_bounds(el).1, ());
+            let orders = [
+                (dense(&basis, left.first, &left.value), dense(&basis, right.first, &right.value), 1.0),
+                (dense(&basis, left.first, &left.d1), dense(&basis, right.first, &right.d1), 1.0 / h),
+                (dense(&basis, left.first, &left.d2), dense(&basis, right.first, &right.d2), 1.0 / (h * h)),
+            ];
+            for (order, (l, r, scale)) in orders.iter().enumerate() {
+                if order == 2 && p < 2 {
+                    continue;
+                }
+                let jump = l.iter().zip(r).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                if order + b.multiplicity <= p {
+                    prop_assert!(jump < 1e-8 * scale.max(1.0), "order {order} jumps by {jump} at m = {}", b.multiplicity);
+                } else if order + b.multiplicity == p + 1 {
+                    prop_assert!(jump > 1e-6 * scale, "order {order} continuous at m = {}", b.multiplicity);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn breaks_fall_on_element_boundaries() {
+    let b = Basis::with_breaks(
+        3,
+        10,
+        100.0,
+        false,
+        &[Break {
+            at: 37.0,
+            multiplicity: 3,
+        }],
+    )
+    .unwrap();
+    // 37 px in 4 elements, 63 px in 6: 10 elements, 2 extra functions.
+    assert_eq!(b.n_elements(), 10);
+    assert_eq!(b.n_functions(), 10 + 3 + 2);
+    assert_eq!(b.knots().iter().filter(|&&k| k == 37.0).count(), 3);
+    let (e, t) = b.locate(37.0);
+    assert_eq!((b.element_bounds(e).0, t), (37.0, 0.0));
+    // A corner: only one function is non-zero at the break.
+    let mut v = [0.0; MAX_DEGREE + 1];
+    b.eval(37.0, &mut v);
+    assert!((v[0] - 1.0).abs() < 1e-14, "{v:?}");
+    // Without breaks, the uniform basis.
+    assert_eq!(
+        Basis::with_breaks(3, 10, 100.0, false, &[]).unwrap(),
+        Basis::new(3, 10, 100.0, false).unwrap()
+    );
+}
+
+#[test]
+fn invalid_breaks_are_errors() {
+    let at = |at: f64, multiplicity: usize| Break { at, multiplicity };
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(0.0, 3)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(100.0, 3)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, true, &[at(100.0, 3)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, true, &[at(0.0, 3)]).is_ok());
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(f64::NAN, 3)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(50.0, 5)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(50.0, 0)]).is_err());
+    assert!(Basis::with_breaks(3, 10, 100.0, false, &[at(50.0, 3), at(50.0, 2)]).is_err());
+}

@@ -15,6 +15,7 @@
 //! `kappa < 0`, and the point `C + r n` lies on a parallel curve whose
 //! length element is `(1 - kappa r)` times the curve's.
 
+mod corners;
 pub mod init;
 mod project;
 
@@ -22,7 +23,7 @@ pub use init::InitialCurve;
 
 use crate::error::{Error, Result};
 use crate::solver::{BandCholesky, SymBandMatrix};
-use crate::spline::{cardinal_polynomials, Basis, MAX_DEGREE};
+use crate::spline::{Basis, MAX_DEGREE};
 use serde::{Deserialize, Serialize};
 
 /// Position, unit tangent and normal, curvature and speed at a parameter.
@@ -49,6 +50,8 @@ pub struct SplineCurve {
     /// coordinate `t` in `[0, 1]`: evaluation is one Horner pass, which
     /// makes the projection of ~1e5 band pixels cheap.
     poly: Vec<[[f64; MAX_DEGREE + 1]; 2]>,
+    /// Parameters of the corners (knots of multiplicity >= degree), sorted.
+    corners: Vec<f64>,
 }
 
 /// The serialisable description of a [`SplineCurve`] for result files.
@@ -87,12 +90,12 @@ impl SplineCurve {
             });
         }
         let p = basis.degree();
-        let pieces = cardinal_polynomials(p);
         let poly = (0..basis.n_elements())
             .map(|e| {
+                let (first, pieces) = basis.element_polynomials(e);
                 let mut c = [[0.0; MAX_DEGREE + 1]; 2];
                 for (k, piece) in pieces.iter().enumerate().take(p + 1) {
-                    let q = ctrl[basis.index(e, k)];
+                    let q = ctrl[basis.index(first, k)];
                     for m in 0..=p {
                         c[0][m] += q[0] * piece[m];
                         c[1][m] += q[1] * piece[m];
@@ -101,7 +104,18 @@ impl SplineCurve {
                 c
             })
             .collect();
-        Ok(SplineCurve { basis, ctrl, poly })
+        let corners = basis
+            .breaks()
+            .iter()
+            .filter(|b| b.multiplicity >= p)
+            .map(|b| b.at)
+            .collect();
+        Ok(SplineCurve {
+            basis,
+            ctrl,
+            poly,
+            corners,
+        })
     }
 
     /// Least-squares B-spline curve of `degree` through dense samples of a
@@ -115,6 +129,30 @@ impl SplineCurve {
     /// measurable bias (its weight is 1e-10 of the data's). Closed curves are
     /// re-oriented counterclockwise on screen.
     pub fn fit(points: &[[f64; 2]], closed: bool, degree: usize, spacing: f64) -> Result<Self> {
+        SplineCurve::fit_with_corners(points, closed, degree, spacing, &[])
+    }
+
+    /// [`SplineCurve::fit`] with a corner at each of the points whose
+    /// indices are in `corners`: a knot of multiplicity `degree` (the curve
+    /// is `C^0` there and its tangent may break) at that point's chord-length
+    /// parameter. Without corners this is [`SplineCurve::fit`]. A corner
+    /// at the first point of an open curve or at its last is ignored (the
+    /// ends are breaks already); out-of-range indices are errors.
+    pub fn fit_with_corners(
+        points: &[[f64; 2]],
+        closed: bool,
+        degree: usize,
+        spacing: f64,
+        corners: &[usize],
+    ) -> Result<Self> {
+        if let Some(&i) = corners.iter().find(|&&i| i >= points.len()) {
+            return Err(Error::invalid(
+                "corner",
+                format!("point {i} of {}", points.len()),
+            ));
+        }
+        // Every input point's index among the kept points.
+        let mut kept_index = Vec::with_capacity(points.len());
         if points
             .iter()
             .any(|p| !(p[0].is_finite() && p[1].is_finite()))
@@ -134,9 +172,12 @@ impl SplineCurve {
             if pts.last().is_none_or(|q| dist(*q, p) > 1e-9) {
                 pts.push(p);
             }
+            kept_index.push(pts.len() - 1);
         }
         if closed && pts.len() > 1 && dist(pts[0], pts[pts.len() - 1]) <= 1e-9 {
             pts.pop();
+            let n = pts.len();
+            kept_index.iter_mut().for_each(|k| *k %= n);
         }
         let min_points = if closed { 3 } else { 2 };
         if pts.len() < min_points {
@@ -148,8 +189,12 @@ impl SplineCurve {
                 ),
             });
         }
+        let mut corner_at: Vec<usize> = corners.iter().map(|&i| kept_index[i]).collect();
         if closed && shoelace(&pts) > 0.0 {
             pts.reverse();
+            // Point k is now n - 1 - k; the curve starts at the old last one.
+            let n = pts.len();
+            corner_at.iter_mut().for_each(|k| *k = n - 1 - *k);
         }
         let mut params = Vec::with_capacity(pts.len());
         let mut acc = 0.0;
@@ -170,7 +215,19 @@ impl SplineCurve {
         }
         let min_el = if closed { degree + 1 } else { 1 };
         let n_el = ((length / spacing).round() as usize).max(min_el);
-        let basis = Basis::new(degree, n_el, length, closed)?;
+        let breaks: Vec<crate::spline::Break> = corner_at
+            .iter()
+            .map(|&k| params[k])
+            .filter(|&at| closed || (at > 0.0 && at < length))
+            .map(|at| crate::spline::Break {
+                at,
+                multiplicity: degree,
+            })
+            .collect::<Vec<_>>();
+        let mut breaks = breaks;
+        breaks.sort_by(|a, b| a.at.total_cmp(&b.at));
+        breaks.dedup_by(|a, b| a.at == b.at);
+        let basis = Basis::with_breaks(degree, n_el, length, closed, &breaks)?;
         let n = basis.n_functions();
         let mut m = SymBandMatrix::zeros(n, degree, closed)?;
         let mut rhs_x = vec![0.0; n];
@@ -236,8 +293,14 @@ impl SplineCurve {
     #[inline]
     pub fn derivatives(&self, u: f64) -> [[f64; 2]; 3] {
         let (e, t) = self.basis.locate(u);
+        self.derivatives_at(e, t)
+    }
+
+    /// [`SplineCurve::derivatives`] on element `e` at local coordinate `t`.
+    #[inline]
+    pub(crate) fn derivatives_at(&self, e: usize, t: f64) -> [[f64; 2]; 3] {
         let p = self.basis.degree();
-        let inv_h = 1.0 / self.basis.element_length();
+        let inv_h = 1.0 / self.basis.element_bounds(e).1;
         let mut out = [[0.0; 2]; 3];
         for (axis, c) in self.poly[e].iter().enumerate() {
             let (mut v, mut d1, mut d2) = (c[p], 0.0, 0.0);
@@ -273,7 +336,14 @@ impl SplineCurve {
         let mut a = u0;
         while a < u1 {
             // Integrate element by element: the integrand is smooth inside one.
-            let next = ((a / h).floor() + 1.0) * h;
+            let next = if self.basis.breaks().is_empty() {
+                ((a / h).floor() + 1.0) * h
+            } else {
+                let (e, _) = self.basis.locate(a);
+                let (start, len) = self.basis.element_bounds(e);
+                // Parameters past L on a closed curve: the element's copy.
+                start + len + (a - a.rem_euclid(self.param_length())).max(0.0)
+            };
             let b = if next > a {
                 next.min(u1)
             } else {
@@ -294,10 +364,9 @@ impl SplineCurve {
         if !self.is_closed() {
             return None;
         }
-        let h = self.basis.element_length();
         let mut total = 0.0;
         for e in 0..self.basis.n_elements() {
-            let a = e as f64 * h;
+            let (a, h) = self.basis.element_bounds(e);
             total += gauss_legendre(a, a + h, |u| {
                 let [p, d, _] = self.derivatives(u);
                 0.5 * (p[0] * d[1] - p[1] * d[0])

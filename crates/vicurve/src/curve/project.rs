@@ -15,7 +15,8 @@ pub struct Projection {
     /// Unit normal at the closest point.
     pub normal: [f64; 2],
     /// True when the closest point is an end of an open curve (the point is
-    /// past the end, not beside the curve).
+    /// past the end, not beside the curve), or the vertex of a corner (the
+    /// point is in the wedge beyond it; see `curve/corners.rs`).
     pub at_end: bool,
 }
 
@@ -27,6 +28,9 @@ impl SplineCurve {
     /// fraction of a pixel; steps are limited to one element
     /// so that a poor start cannot jump across the curve.
     pub fn project(&self, x: f64, y: f64, u0: f64) -> Projection {
+        if !self.corners.is_empty() {
+            return self.project_cornered(x, y, u0);
+        }
         let l = self.param_length();
         let closed = self.is_closed();
         let max_step = self.basis().element_length();

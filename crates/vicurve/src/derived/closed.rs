@@ -95,10 +95,11 @@ fn measures(
 /// `3 p - 1 <= 14` in each element, which 8-point Gauss–Legendre
 /// integrates exactly.
 fn area_centroid(curve: &SplineCurve) -> (f64, [f64; 2]) {
-    let h = curve.basis().element_length();
     let (mut a, mut mx, mut my) = (0.0, 0.0, 0.0);
     for e in 0..curve.basis().n_elements() {
-        let (c, r) = ((e as f64 + 0.5) * h, 0.5 * h);
+        // Elements differ in length between breaks (corners).
+        let (start, len) = curve.basis().element_bounds(e);
+        let (c, r) = (start + 0.5 * len, 0.5 * len);
         for (x, w) in GL8_X.iter().zip(GL8_W) {
             let [p, d, _] = curve.derivatives(c + r * x);
             let wr = w * r;

@@ -182,6 +182,14 @@ pub struct FitConfig {
     /// (uneven light). Default: varying, elements of 128 px (see
     /// [`LevelModel`]).
     pub levels: LevelModel,
+    /// Corners: arc lengths (pixels) along the initial curve, from its
+    /// start, where the measured curve may have a corner or a tangent break
+    /// (repeated knots; see [`crate::fit::breaks`] for the
+    /// model and how the positions follow the curve). Each must be finite,
+    /// inside the curve (`0 < s < L` open, `0 <= s < L` closed: checked when
+    /// the curve is known) and distinct; they need exact coordinates.
+    /// Default: none (a smooth curve).
+    pub breaks: Vec<f64>,
 }
 
 impl Default for FitConfig {
@@ -200,6 +208,7 @@ impl Default for FitConfig {
             blur_correction: true,
             coords: Coords::Exact,
             levels: LevelModel::default(),
+            breaks: Vec::new(),
         }
     }
 }
@@ -276,10 +285,35 @@ impl FitConfig {
         if let Coords::Levelset { mesh_size } = self.coords {
             crate::levelset::check_mesh_size(mesh_size)?;
         }
+        self.validate_breaks()?;
         if !(self.sample_spacing.is_finite() && self.sample_spacing >= 0.01) {
             return Err(Error::invalid(
                 "sample spacing",
                 format!("{} (must be >= 0.01 px)", self.sample_spacing),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl FitConfig {
+    /// The checks of [`FitConfig::breaks`] that do not need the curve.
+    fn validate_breaks(&self) -> Result<()> {
+        if let Some(b) = self.breaks.iter().find(|b| !(b.is_finite() && **b >= 0.0)) {
+            return Err(Error::invalid(
+                "breaks",
+                format!("{b} (arc lengths must be finite and >= 0 px)"),
+            ));
+        }
+        let mut sorted = self.breaks.clone();
+        sorted.sort_by(f64::total_cmp);
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::invalid("breaks", format!("{} px given twice", w[0])));
+        }
+        if !self.breaks.is_empty() && self.coords != Coords::Exact {
+            return Err(Error::invalid(
+                "breaks",
+                "need exact coordinates (not levelsets)",
             ));
         }
         Ok(())

@@ -100,6 +100,45 @@ pub struct StageReport {
     pub seconds: f64,
     /// How the stage ended.
     pub outcome: Outcome,
+    /// Every Gauss–Newton iteration of the stage, in order (empty in
+    /// result files written before it was recorded).
+    #[serde(default)]
+    pub history: Vec<IterationRecord>,
+}
+
+/// Which run of a stage an iteration belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunKind {
+    /// The fit on a reference curve (the stage's first, or one after a
+    /// re-reference or a settling step).
+    Reference,
+    /// The refit with a global pair of gray levels after varying levels
+    /// were found not significant.
+    GlobalLevels,
+    /// A refit with halved elements (automatic element length).
+    Refine,
+    /// A refit with robust weights.
+    Robust,
+}
+
+/// One Gauss–Newton iteration, for convergence diagnostics.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IterationRecord {
+    /// Index of the iteration within the stage, from 0.
+    pub iteration: usize,
+    /// `max |dLambda|` of the step before any step limit, pixels (the
+    /// quantity compared with the tolerance).
+    pub max_step: f64,
+    /// RMS of the residual `g - f` over the band at this iteration, gray
+    /// levels.
+    pub residual_rms: f64,
+    /// Which run it belongs to; a refinement or reweighting run restarts
+    /// from the current curve, so its first steps jump.
+    pub run: RunKind,
+    /// Whether it is the first iteration on a new reference curve (the
+    /// reference moved just before it).
+    pub new_reference: bool,
 }
 
 /// One sample of the measured curve.

@@ -68,6 +68,10 @@ pub fn initial_shape(points: &[[f64; 2]], closed: bool, model: ShapeModel) -> Re
         ));
     }
     match (model, closed) {
+        (ShapeModel::BsplineCurve, _) => Err(mismatch(
+            model,
+            "a free B-spline curve has no parametric shape (see model::bspline_curve)",
+        )),
         (ShapeModel::Line, false) => Ok(line(points).shape()),
         (ShapeModel::Line, true) => Err(mismatch(
             model,

@@ -48,7 +48,12 @@
 //! Coordinates are pixels, `x` the column and `y` the row; angles are in
 //! radians, counterclockwise on screen (from `+x` towards `-y`), as in
 //! [`crate::truth::Shape`].
+//!
+//! The free B-spline curve whose control points are the unknowns
+//! ([`ShapeModel::BsplineCurve`]) is fitted by [`bspline_curve`], not by
+//! [`measure_model`].
 
+pub mod bspline_curve;
 mod circle;
 mod ellipse;
 mod geometry;
@@ -85,6 +90,9 @@ pub enum ShapeModel {
         /// Number of vertices.
         sides: usize,
     },
+    /// A free B-spline curve, its control points the unknowns
+    /// ([`bspline_curve`]).
+    BsplineCurve,
 }
 
 impl std::fmt::Display for ShapeModel {
@@ -94,24 +102,26 @@ impl std::fmt::Display for ShapeModel {
             ShapeModel::Ellipse => f.write_str("ellipse"),
             ShapeModel::Line => f.write_str("line"),
             ShapeModel::Polygon { sides } => write!(f, "polygon:{sides}"),
+            ShapeModel::BsplineCurve => f.write_str("bspline-curve"),
         }
     }
 }
 
 impl std::str::FromStr for ShapeModel {
     type Err = Error;
-    /// `circle`, `ellipse`, `line` or `polygon:N` (`N` from 3 to
-    /// [`MAX_POLYGON_SIDES`]).
+    /// `circle`, `ellipse`, `line`, `polygon:N` (`N` from 3 to
+    /// [`MAX_POLYGON_SIDES`]) or `bspline-curve`.
     fn from_str(s: &str) -> Result<Self> {
         let bad = |reason: String| Error::invalid("model", reason);
         match s.trim() {
             "circle" => Ok(ShapeModel::Circle),
             "ellipse" => Ok(ShapeModel::Ellipse),
             "line" => Ok(ShapeModel::Line),
+            "bspline-curve" => Ok(ShapeModel::BsplineCurve),
             other => {
                 let Some(n) = other.strip_prefix("polygon:") else {
                     return Err(bad(format!(
-                        "'{other}' (expected circle, ellipse, line or polygon:N)"
+                        "'{other}' (expected circle, ellipse, line, polygon:N or bspline-curve)"
                     )));
                 };
                 let sides: usize = n

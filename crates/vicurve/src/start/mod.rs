@@ -40,6 +40,7 @@
 
 pub mod boundary;
 pub mod region;
+pub mod ridge;
 pub mod threshold;
 
 use crate::curve::InitialCurve;

@@ -1,0 +1,222 @@
+//! Curves with corners: knots of multiplicity `p` (the degree), where the
+//! curve is only `C^0` and its tangent may break (see
+//! [`SplineCurve::fit_with_corners`] and [`crate::spline::knots`]).
+//!
+//! # Closest points near a corner
+//! On a smooth curve a point's closest point is where `(X - C(u)) . C'(u)`
+//! vanishes, and Newton's method finds it. At a corner `C'` jumps, so:
+//!
+//! * Newton's steps never cross a corner: a step that would is stopped on
+//!   it, and from the corner the iteration goes on along the side whose
+//!   one-sided derivative points towards the point.
+//! * When neither side does (the point lies in the wedge between the two
+//!   sides' normals, beyond the corner of a convex turn) the closest point
+//!   is the vertex itself. Such a point is reported like a point past the
+//!   end of an open curve (`at_end` of [`SplineCurve::project`]'s result),
+//!   and the band leaves it out, as the method leaves out the pixels past
+//!   the ends: its distance to the curve is not along any normal, and the
+//!   normal displacement `U n` does not move it.
+//! * On the other side of the turn a point may have a closest point on
+//!   each side. Near a corner (within four times its distance, plus two
+//!   elements) the projection is also started from both sides of the
+//!   corner and the nearest foot wins, so that the band assigns each pixel
+//!   to the side it is really closest to, whatever its start.
+//! * A pixel near the vertex sees both sides (its square is crossed by
+//!   both, or by a side that ends inside it), which no one-edge virtual
+//!   profile models: [`SplineCurve::corner_clearances`] gives the discs
+//!   around the vertices inside which the band leaves pixels out (radius
+//!   `CORNER_CLEARANCE / sin(theta / 2)` for an interior angle `theta`: the
+//!   points within `CORNER_CLEARANCE` of both sides).
+
+/// Distance from both sides of a corner within which a pixel is left out
+/// of the band, pixels: a pixel's square reaches `sqrt(2) / 2` px from its
+/// centre, plus a margin. Measured on the square of `tests/breaks.rs`:
+/// with no clearance the two sides' ends are pulled by up to 2.3e-2 px.
+pub(crate) const CORNER_CLEARANCE: f64 = 1.0;
+/// Largest clearance radius (very sharp corners), pixels.
+const MAX_CLEARANCE_RADIUS: f64 = 8.0;
+
+use super::project::Projection;
+use super::{frame_from, SplineCurve};
+
+impl SplineCurve {
+    /// Parameters of the corners (knots of multiplicity at least the
+    /// degree), sorted; empty for a smooth curve.
+    pub fn corners(&self) -> &[f64] {
+        &self.corners
+    }
+
+    /// The vertices of the corners and the radius around each inside which
+    /// band pixels are left out (the reasons are in `curve/corners.rs`).
+    pub fn corner_clearances(&self) -> Vec<([f64; 2], f64)> {
+        self.corners
+            .iter()
+            .map(|&c| {
+                let [p, right, _] = self.derivatives(c);
+                let left = self.derivatives_left(c)[1];
+                let (nl, nr) = (left[0].hypot(left[1]), right[0].hypot(right[1]));
+                // cos of the turning angle; sin(theta / 2) = cos(turn / 2).
+                let cos_turn = ((left[0] * right[0] + left[1] * right[1]) / (nl * nr).max(1e-300))
+                    .clamp(-1.0, 1.0);
+                let half = (0.5 * (1.0 + cos_turn)).sqrt();
+                let radius = (CORNER_CLEARANCE / half.max(1e-9)).min(MAX_CLEARANCE_RADIUS);
+                (p, radius)
+            })
+            .collect()
+    }
+
+    /// `C(u)`, `C'(u)` and `C''(u)` as the limits from the left (at a knot,
+    /// the element that ends there).
+    pub fn derivatives_left(&self, u: f64) -> [[f64; 2]; 3] {
+        let (e, t) = self.basis.locate_left(u);
+        self.derivatives_at(e, t)
+    }
+
+    /// Closest point on a curve with corners (see the [module docs](self)).
+    pub(crate) fn project_cornered(&self, x: f64, y: f64, u0: f64) -> Projection {
+        let mut best = self.newton_cornered(x, y, u0);
+        let mut best_d = self.distance_to(x, y, best.u);
+        let reach = 4.0 * best_d + 2.0 * self.basis.element_length();
+        let l = self.param_length();
+        for &c in &self.corners {
+            let v = self.point(c);
+            if (x - v[0]).hypot(y - v[1]) > reach {
+                continue;
+            }
+            let delta = 1e-6 * self.basis.element_length();
+            for start in [c - delta, c + delta] {
+                if !self.is_closed() && !(0.0..=l).contains(&start) {
+                    continue;
+                }
+                let pr = self.newton_cornered(x, y, start);
+                let d = self.distance_to(x, y, pr.u);
+                if d < best_d - 1e-12 {
+                    best = pr;
+                    best_d = d;
+                }
+            }
+        }
+        best
+    }
+
+    fn distance_to(&self, x: f64, y: f64, u: f64) -> f64 {
+        let p = self.point(u);
+        (x - p[0]).hypot(y - p[1])
+    }
+
+    /// Newton's method that stops on corners (see the module docs).
+    fn newton_cornered(&self, x: f64, y: f64, u0: f64) -> Projection {
+        let l = self.param_length();
+        let closed = self.is_closed();
+        let max_step = self.basis().element_length();
+        // The corner at `u`, if any (exact: iterates are set onto corners).
+        let corner_at = |u: f64| {
+            let w = if closed { u.rem_euclid(l) } else { u };
+            self.corners.contains(&w)
+        };
+        // The first corner strictly between a and b (either order), with
+        // its periodic copies for closed curves.
+        let crossed = |a: f64, b: f64| -> Option<f64> {
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            let shifts: &[f64] = if closed {
+                &[-l, 0.0, l, 2.0 * l]
+            } else {
+                &[0.0]
+            };
+            let mut hit: Option<f64> = None;
+            for &c in &self.corners {
+                for &k in shifts {
+                    let cc = c + k;
+                    if cc > lo && cc < hi && hit.is_none_or(|h| (cc - a).abs() < (h - a).abs()) {
+                        hit = Some(cc);
+                    }
+                }
+            }
+            hit
+        };
+        let newton = |d: [[f64; 2]; 3]| -> f64 {
+            let [p, d1, d2] = d;
+            let (dx, dy) = (x - p[0], y - p[1]);
+            let g = dx * d1[0] + dy * d1[1];
+            let hess = d1[0] * d1[0] + d1[1] * d1[1] - (dx * d2[0] + dy * d2[1]);
+            if hess > 1e-12 {
+                g / hess
+            } else {
+                g / (d1[0] * d1[0] + d1[1] * d1[1]).max(1e-12)
+            }
+        };
+        let tangential = |d: [[f64; 2]; 3]| (x - d[0][0]) * d[1][0] + (y - d[0][1]) * d[1][1];
+        let mut u = if closed { u0 } else { u0.clamp(0.0, l) };
+        let mut at_end = false;
+        let mut left_side = false;
+        for _ in 0..30 {
+            let mut step;
+            if corner_at(u) {
+                let right = self.derivatives(u);
+                let left = self.derivatives_left(u);
+                let (gl, gr) = (tangential(left), tangential(right));
+                if gl >= 0.0 && gr <= 0.0 {
+                    // The vertex is the closest point (a wedge point).
+                    at_end = gl > 1e-9 || gr < -1e-9;
+                    left_side = false;
+                    break;
+                }
+                left_side = gr <= 0.0;
+                step = if left_side {
+                    newton(left).min(0.0)
+                } else {
+                    newton(right).max(0.0)
+                };
+                if step == 0.0 {
+                    // A wrong-signed Newton step: take the gradient's.
+                    let d = if left_side { left } else { right };
+                    step = tangential(d) / (d[1][0] * d[1][0] + d[1][1] * d[1][1]).max(1e-12);
+                }
+            } else {
+                left_side = false;
+                step = newton(self.derivatives(u));
+            }
+            let step = step.clamp(-max_step, max_step);
+            let mut next = u + step;
+            if let Some(c) = crossed(u, next) {
+                next = c;
+            }
+            if !closed && (next <= 0.0 || next >= l) {
+                next = next.clamp(0.0, l);
+                if next == u {
+                    at_end = true;
+                    break;
+                }
+            }
+            let moved = (next - u).abs();
+            u = next;
+            if moved < 1e-5 && !corner_at(u) {
+                break;
+            }
+        }
+        if closed {
+            u = u.rem_euclid(l);
+            if u >= l {
+                u = 0.0;
+            }
+        } else if u <= 0.0 || u >= l {
+            let d = self.derivatives(u);
+            let speed = d[1][0].hypot(d[1][1]);
+            at_end = at_end || tangential(d).abs() > 1e-9 * speed.max(1.0);
+        }
+        let d = if left_side {
+            self.derivatives_left(u)
+        } else {
+            self.derivatives(u)
+        };
+        let f = frame_from(d[0], d[1], d[2]);
+        let r = (x - f.point[0]) * f.normal[0] + (y - f.point[1]) * f.normal[1];
+        Projection {
+            u,
+            r,
+            curvature: f.curvature,
+            normal: f.normal,
+            at_end,
+        }
+    }
+}
