@@ -167,8 +167,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
         Some(init) => init,
         None => {
             if args.kind == Kind::Contour {
-                let found = vicurve::start::ridge::find_line(&image, &start)
-                    .map_err(|e| format!("{e}; or give a starting curve with --init"))?;
+                let found =
+                    vicurve::start::ridge::find_line(&image, &start).map_err(|e| match e {
+                        // Its reasons already say what to try.
+                        vicurve::Error::NoLine { .. } => e.to_string(),
+                        _ => format!("{e}; or give a starting curve with --init"),
+                    })?;
                 eprintln!(
                     "vicurve: automatic start: {} line followed from the picked point over {:.0} px (scale {} px), {} curve",
                     if found.bright { "bright" } else { "dark" },
@@ -213,17 +217,17 @@ pub fn run(args: Args) -> Result<(), Failure> {
     };
     if args.model == Some(vicurve::model::ShapeModel::BsplineCurve) {
         // `--dxf` and `--svg-curve` then write the fitted curve.
-        diagnostics?;
         let (o, p) = (&args.outputs, path_text.as_str());
-        return crate::model_output::run_bspline_curve(o, &args.cad, p, &image, &init, &config, &m);
+        let written =
+            crate::model_output::run_bspline_curve(o, &args.cad, p, &image, &init, &config, &m);
+        return written.and(diagnostics.map_err(Failure::Error));
     }
     let size = Some((image.width(), image.height()));
     let cad = args.cad.write(&m.curve_data(), &path_text, size);
     if let Some(model) = args.model {
-        cad?;
-        diagnostics?;
         let (o, p) = (&args.outputs, path_text.as_str());
-        return crate::model_output::run(model, o, p, &image, &init, &config, &m);
+        let written = crate::model_output::run(model, o, p, &image, &init, &config, &m);
+        return written.and(cad).and(diagnostics.map_err(Failure::Error));
     }
     let written = (path_text.as_str(), &image, &init, &config, &m);
     write_outputs_grown(&args.outputs, written, grown.as_ref())?;
@@ -370,19 +374,8 @@ fn build_config(args: &Args) -> Result<FitConfig, Failure> {
 
 /// `--levels global|varying|varying:LEN`.
 pub fn parse_levels(s: &str) -> Result<LevelModel, Failure> {
-    let bad = || {
-        Failure::Error(format!(
-            "--levels '{s}' is not understood (expected global, varying or varying:LEN with LEN in pixels, e.g. varying:200)"
-        ))
-    };
-    match s.split_once(':') {
-        None if s == "global" => Ok(LevelModel::Global),
-        None if s == "varying" => Ok(LevelModel::default()),
-        Some(("varying", len)) => Ok(LevelModel::Varying {
-            element_length: len.trim().parse().map_err(|_| bad())?,
-        }),
-        _ => Err(bad()),
-    }
+    s.parse::<LevelModel>()
+        .map_err(|e| Failure::Error(format!("--levels: {e}")))
 }
 
 pub fn parse_interp(s: &str) -> Result<Interpolation, Failure> {

@@ -15,6 +15,7 @@ use numpy::{PyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeWarning, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
+use vicurve::fit::grow::GrowConfig;
 use vicurve::fit::{FitConfig, Outcome, Stage};
 use vicurve::interp::Sampler;
 use vicurve::spline::Basis;
@@ -109,6 +110,20 @@ fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Stage>>
 /// - `blur_correction`: estimate the blur and report the true boundary or
 ///   centre line; turn it off for images that are not blurred steps or
 ///   lines (such as `synth("paper-disc")`).
+/// - `levels`: the virtual image's gray levels, "varying" (they follow
+///   uneven light along the curve; kept only when they explain the image
+///   better than noise would), "varying:LEN" (elements of LEN px) or
+///   "global" (one pair, the paper's).
+/// - `breaks`: arc lengths (pixels along the starting curve from its
+///   start) where the curve may have a corner.
+/// - `grow`: True to grow an open start (a `Segment` or open `Polyline` on
+///   the curve) segment by segment until the image border, a closed loop or
+///   the end of the edge; a number stops at that length (pixels). The
+///   result's `grow` says why each end stopped.
+///
+/// With `init=None` or `vicurve.Auto(...)` and `kind="contour"`, the line
+/// through `Auto(pick=(x, y))` is followed along its ridge (or valley) to
+/// make the start.
 ///
 /// Raises `FitError` (with the partial result in `.result`) when the fit
 /// diverges, `ValueError` for bad arguments, images or curves,
@@ -118,7 +133,8 @@ fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Stage>>
 #[pyo3(signature = (
     image, init = None, *, kind = "silhouette", stages = None, degree = 3,
     polarity = "auto", interpolation = "cubic", tolerance = 1e-4,
-    max_iterations = 200, blur_correction = true
+    max_iterations = 200, blur_correction = true, levels = "varying", breaks = None,
+    grow = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
@@ -133,7 +149,11 @@ pub fn measure(
     tolerance: f64,
     max_iterations: i64,
     blur_correction: bool,
+    levels: &str,
+    breaks: Option<Vec<f64>>,
+    grow: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMeasurement> {
+    let grow = grow_from_py(grow)?;
     let config = FitConfig {
         kind: args::parse_kind(kind).map_err(value_error)?,
         polarity: args::parse_polarity(polarity).map_err(value_error)?,
@@ -143,26 +163,33 @@ pub fn measure(
         tolerance,
         max_iterations: count("max_iterations", max_iterations)?,
         blur_correction,
+        levels: levels.parse().map_err(to_py_err)?,
+        breaks: breaks.unwrap_or_default(),
         ..FitConfig::default()
     };
     config.validate().map_err(to_py_err)?;
     let init = init_from_py(init)?;
-    if matches!(init, InitArg::Auto(_)) && config.kind == Kind::Contour {
-        return Err(value_error(
-            "init: the automatic start finds silhouettes (regions), not thin lines; give a starting curve for kind=\"contour\" (vicurve.Circle, Segment or Polyline)",
-        ));
-    }
     let image = ImageArg::from_py(image)?;
     let run = py.detach(move || -> vicurve::Result<PyMeasurement> {
         let (image, source) = image.load()?;
         let (init, start) = match init {
             InitArg::Curve(c) => (c, None),
+            InitArg::Auto(cfg) if config.kind == Kind::Contour => {
+                (vicurve::start::ridge::find_line(&image, &cfg)?.curve, None)
+            }
             InitArg::Auto(cfg) => {
                 let found = vicurve::start::find_silhouette(&image, &cfg)?;
                 (found.curve.clone(), Some(found))
             }
         };
-        let measurement = vicurve::fit::measure(&image, &init, &config)?;
+        let (measurement, grow) = match grow {
+            None => (vicurve::fit::measure(&image, &init, &config)?, None),
+            Some(settings) => {
+                let sampler = vicurve::interp::Sampler::new(&image, config.interpolation);
+                let g = vicurve::fit::grow::grow(&sampler, init.to_curve()?, &config, &settings)?;
+                (g.measurement, Some(g.report))
+            }
+        };
         Ok(PyMeasurement {
             measurement,
             init,
@@ -170,6 +197,7 @@ pub fn measure(
             source,
             size: (image.width(), image.height()),
             start,
+            grow,
         })
     });
     let result = run.map_err(to_py_err)?;
@@ -194,6 +222,24 @@ pub fn measure(
             Err(err)
         }
     }
+}
+
+/// `grow=`: None or False (no growth), True (until the border, a loop or
+/// the end of the edge), or a length in pixels.
+fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> {
+    let Some(obj) = obj else { return Ok(None) };
+    if let Ok(flag) = obj.cast::<pyo3::types::PyBool>() {
+        return Ok(flag.is_true().then(GrowConfig::default));
+    }
+    let length: f64 = obj
+        .extract()
+        .map_err(|_| value_error("grow: expected True, False, None or a length in pixels"))?;
+    let settings = GrowConfig {
+        max_length: Some(length),
+        ..GrowConfig::default()
+    };
+    settings.validate().map_err(to_py_err)?;
+    Ok(Some(settings))
 }
 
 /// Render a test image of exactly known geometry, as `vicurve synth`;

@@ -7,6 +7,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vicurve::curve::InitialCurve;
+use vicurve::fit::grow::GrowReport;
 use vicurve::fit::{Divergence, FitConfig, Measurement, Outcome};
 use vicurve::report::{polarity_text, ResultFile};
 use vicurve::start::AutoStart;
@@ -32,6 +33,8 @@ pub struct PyMeasurement {
     pub size: (usize, usize),
     /// How the automatic start found the curve, when it did.
     pub start: Option<AutoStart>,
+    /// How the curve grew from a short start (`grow=`).
+    pub grow: Option<GrowReport>,
 }
 
 impl PyMeasurement {
@@ -201,14 +204,22 @@ impl PyMeasurement {
     /// pretty-printed JSON with a final newline. `input.path` is the path
     /// the image was read from, or a description of the array.
     fn to_json(&self) -> String {
-        ResultFile::new(
+        let mut record = ResultFile::new(
             &self.source,
             self.size,
             &self.init,
             &self.config,
             &self.measurement,
-        )
-        .to_json()
+        );
+        record.grow = self.grow.as_ref();
+        record.to_json()
+    }
+
+    /// How the curve grew (`grow=`): why each end stopped (`ends`) and
+    /// every step; None without growth.
+    #[getter]
+    fn grow<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        serde_to_py(py, &self.grow)
     }
 
     fn __repr__(&self) -> String {

@@ -81,8 +81,15 @@ def test_curves_outside_the_image_or_invalid(disc):
 
 
 def test_automatic_start_errors(disc):
-    with pytest.raises(ValueError, match="silhouettes"):
+    # A line's automatic start follows the line through a picked point.
+    with pytest.raises(ValueError, match="pick"):
         vicurve.measure(disc, None, kind="contour")
+    with pytest.raises(ValueError, match="grow"):
+        vicurve.measure(disc, vicurve.Circle(100, 100, 55), grow=True)
+    with pytest.raises(ValueError, match="grow"):
+        vicurve.measure(disc, vicurve.Segment(150, 90, 150, 110), grow="far")
+    with pytest.raises(ValueError, match="levels"):
+        vicurve.measure(disc, vicurve.Circle(100, 100, 55), levels="uneven")
     with pytest.raises(ValueError, match="no contrast"):
         vicurve.measure(np.full((100, 100), 0.5), None)
     with pytest.raises(ValueError, match="outside"):

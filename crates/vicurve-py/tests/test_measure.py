@@ -240,3 +240,31 @@ def test_iteration_limit_warns(disc150):
                             max_iterations=1)
     assert r.outcome == "iteration_limit"
     assert r.history[-1]["outcome"] == {"status": "iteration_limit"}
+
+
+def test_grow_from_a_segment(disc150):
+    """A 30 px segment on the disc's edge grows all round; same accuracy."""
+    image, truth = disc150
+    # The disc's centre is (255.8, 255.3): its right edge is at x = 405.8.
+    r = vicurve.measure(image, vicurve.Segment(404, 270, 404, 240), grow=True)
+    assert r.outcome == "converged"
+    assert r.grow["ends"] == ["closed", "closed"]
+    assert json.loads(r.to_json())["grow"]["ends"] == ["closed", "closed"]
+    stats = vicurve.eval(r.points, truth)
+    assert abs(stats["bias"]) <= 2e-3 and stats["max_abs"] <= 1e-2
+    # A length: an open piece of about that length.
+    r = vicurve.measure(image, vicurve.Segment(404, 270, 404, 240), grow=200)
+    assert r.grow["ends"] == ["length", "length"]
+    assert abs(r.length - 200) < 3
+    assert vicurve.measure(image, vicurve.Circle(256, 256, 140)).grow is None
+
+
+def test_contour_from_a_picked_point():
+    """A thin ring: the line through the picked point is followed all round."""
+    image, truth = vicurve.synth("ring", size=(300, 300), radius=100, blur=1.0)
+    # Centre (150.3, 149.8): the ring's rightmost point is (250.3, 149.8).
+    r = vicurve.measure(image, vicurve.Auto(pick=(251, 151)), kind="contour",
+                        levels="global")
+    assert r.outcome == "converged"
+    assert r.config["levels"] == {"type": "global"}
+    assert vicurve.eval(r.points, truth)["max_abs"] <= 3e-2

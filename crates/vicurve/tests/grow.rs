@@ -199,6 +199,51 @@ fn a_line_that_ends_stops_the_growth() {
     assert!(worst < 0.05, "{worst}");
 }
 
+/// A line bent into a C (an arc of 300 deg, its ends 80 px apart): grown
+/// from a segment on it, it stops at its two ends; the gap is not bridged.
+#[test]
+fn a_c_shaped_line_is_not_closed_across_its_gap() {
+    let (cx, cy, radius) = (150.3, 149.8, 80.0);
+    // The gap is centred on the +x direction: angles within 30 deg of it.
+    let image = Image::from_fn(300, 300, |i, j| {
+        let (dx, dy) = (i as f64 - cx, j as f64 - cy);
+        let d = dx.hypot(dy) - radius;
+        let angle = dy.atan2(dx).abs().to_degrees();
+        let along = ((angle - 30.0) * radius.to_radians() / 2.0).clamp(0.0, 1.0);
+        0.15 + 0.6 * (-d * d / (2.0 * 1.2 * 1.2)).exp() * along
+    });
+    let config = FitConfig {
+        kind: Kind::Contour,
+        ..FitConfig::default()
+    };
+    // A segment across the leftmost part of the arc, 1 px off it.
+    let x = cx - radius + 1.0;
+    let g = grown(
+        &image,
+        [x, cy + 15.0, x, cy - 15.0],
+        &config,
+        &GrowConfig::default(),
+    );
+    let m = &g.measurement;
+    let worst = m
+        .samples
+        .iter()
+        .map(|q| ((q.x - cx).hypot(q.y - cy) - radius).abs())
+        .fold(0.0, f64::max);
+    let ends: Vec<f64> = [m.samples[0], *m.samples.last().unwrap()]
+        .iter()
+        .map(|q| (q.y - cy).atan2(q.x - cx).abs().to_degrees())
+        .collect();
+    println!(
+        "C grown: ends {:?} at {:.1} and {:.1} deg from the gap's axis, worst radius error {worst:.2e}",
+        g.report.ends, ends[0], ends[1]
+    );
+    assert_eq!(g.report.ends, [EndReason::EdgeEnds; 2]);
+    assert!(!m.curve.is_closed());
+    assert!(ends.iter().all(|a| (a - 30.0).abs() < 6.0), "{ends:?}");
+    assert!(worst < 0.1, "{worst}");
+}
+
 /// A length limit stops the growth near that length, on both ends.
 #[test]
 fn growth_stops_at_the_length_asked() {
@@ -272,6 +317,13 @@ fn errors_name_the_problem() {
         min_step: 50.0,
         ..GrowConfig::default()
     };
-    let e = grow(&sampler, segment, &FitConfig::default(), &bad).unwrap_err();
+    let e = grow(&sampler, segment.clone(), &FitConfig::default(), &bad).unwrap_err();
     assert!(e.to_string().contains("grow steps"), "{e}");
+    // Break positions are along the initial curve, which growing replaces.
+    let with_breaks = FitConfig {
+        breaks: vec![10.0],
+        ..FitConfig::default()
+    };
+    let e = grow(&sampler, segment, &with_breaks, &GrowConfig::default()).unwrap_err();
+    assert!(e.to_string().contains("breaks"), "{e}");
 }

@@ -150,6 +150,9 @@ class Result:
     @property
     def auto_start(self) -> Optional[Dict[str, Any]]: ...
     @property
+    def grow(self) -> Optional[Dict[str, Any]]:
+        """How the curve grew (``grow=``): ``ends`` and ``steps``; None without growth."""
+    @property
     def config(self) -> Dict[str, Any]: ...
     def to_json(self) -> str:
         """The JSON document ``vicurve measure --out`` writes for the same input."""
@@ -166,6 +169,9 @@ def measure(
     tolerance: float = 1e-4,
     max_iterations: int = 200,
     blur_correction: bool = True,
+    levels: str = "varying",
+    breaks: Optional[Sequence[float]] = None,
+    grow: Union[bool, float, None] = None,
 ) -> Result:
     """Measure the curve in ``image`` starting from ``init``.
 

@@ -109,10 +109,16 @@ impl SplineCurve {
         let l = self.param_length();
         let closed = self.is_closed();
         let max_step = self.basis().element_length();
-        // The corner at `u`, if any (exact: iterates are set onto corners).
+        // Whether `u` is on a corner. Iterates are set onto corners, but on
+        // a closed curve onto a copy `c + k l`, whose wrapped value may
+        // differ from `c` by rounding: compare within a tolerance.
+        let tol = 1e-9 * l.max(1.0);
         let corner_at = |u: f64| {
             let w = if closed { u.rem_euclid(l) } else { u };
-            self.corners.contains(&w)
+            self.corners.iter().any(|&c| {
+                let d = (w - c).abs();
+                d <= tol || (closed && l - d <= tol)
+            })
         };
         // The first corner strictly between a and b (either order), with
         // its periodic copies for closed curves.
@@ -127,7 +133,14 @@ impl SplineCurve {
             for &c in &self.corners {
                 for &k in shifts {
                     let cc = c + k;
-                    if cc > lo && cc < hi && hit.is_none_or(|h| (cc - a).abs() < (h - a).abs()) {
+                    // A corner the iterate sits on (to rounding) is not
+                    // crossed.
+                    let beyond = (cc - a).abs() > tol;
+                    if beyond
+                        && cc > lo
+                        && cc < hi
+                        && hit.is_none_or(|h| (cc - a).abs() < (h - a).abs())
+                    {
                         hit = Some(cc);
                     }
                 }

@@ -342,7 +342,8 @@ impl SplineCurve {
                 let (e, _) = self.basis.locate(a);
                 let (start, len) = self.basis.element_bounds(e);
                 // Parameters past L on a closed curve: the element's copy.
-                start + len + (a - a.rem_euclid(self.param_length())).max(0.0)
+                // (`a - a.rem_euclid(L)` is `floor(a / L) L`, of either sign.)
+                start + len + (a - a.rem_euclid(self.param_length()))
             };
             let b = if next > a {
                 next.min(u1)

@@ -25,9 +25,11 @@
 //!    end's band is cut) and the extension, and the end's next step is 1.5
 //!    times longer (up to `max_step`); otherwise the step is halved, and an
 //!    end whose step falls under `min_step` is where the edge ends. The two
-//!    ends take turns. When they head towards each other and are closer
-//!    than a step, the points are closed into a loop and measured as a
-//!    closed curve.
+//!    ends take turns. When they head towards each other, each step stops
+//!    short of half the gap between them; once the gap is within the
+//!    growing band (`max(2 R_p, 6)` px), or the new end has run onto the
+//!    other end, the points are closed into a loop and measured as a closed
+//!    curve. An edge that stops short of closing (a C) ends first.
 //! 5. The grown curve (open or closed) is measured with the caller's
 //!    configuration.
 //!
@@ -39,7 +41,7 @@
 //! extension. Everything is in pixels.
 
 use super::{measure_from, Elements, FitConfig, LevelModel, Measurement, Stage};
-use crate::curve::SplineCurve;
+use crate::curve::{dist, SplineCurve};
 use crate::error::{Error, Result};
 use crate::interp::Sampler;
 use crate::virtual_image::{Kind, Profile};
@@ -146,7 +148,7 @@ impl GrowConfig {
             ));
         }
         if self.max_steps == 0 {
-            return Err(Error::invalid("grow steps", "at most 0 steps"));
+            return Err(Error::invalid("grow max_steps", "0 (must be >= 1)"));
         }
         Ok(())
     }
@@ -226,6 +228,14 @@ pub fn grow(
             "the start is closed and has no ends to grow: start from a segment or an open polyline",
         ));
     }
+    if !config.breaks.is_empty() {
+        // Break positions are arc lengths along the initial curve, which
+        // growing replaces.
+        return Err(Error::invalid(
+            "grow",
+            "breaks (corners) cannot be combined with growing: their positions are along the initial curve; measure the grown curve again with the breaks",
+        ));
+    }
     let first = measure_from(sampler, start, config)?;
     let mut report = GrowReport {
         config: grow.clone(),
@@ -258,10 +268,12 @@ pub fn grow(
     let mut closed: Option<Measurement> = None;
     let mut budget = grow.max_steps;
     'growing: while budget > 0 && ends.iter().any(Option::is_none) {
-        // The ends meet: close the loop.
+        // The ends meet: close the loop. Only over a gap the band bridges:
+        // the steps shrink towards each other (below) until then, and an
+        // edge that stops short of closing (a C) ends its growth first.
         let meeting = chain.meeting();
         if let Some(gap) = meeting {
-            if gap <= steps[0].max(steps[1]) && ends.iter().all(Option::is_none) {
+            if gap <= reach && ends.iter().all(Option::is_none) {
                 let loop_fit = SplineCurve::fit(&chain.points(), true, 3, REBUILD_SPACING)
                     .and_then(|c| measure_from(sampler, c, &step_config));
                 match loop_fit {
@@ -588,10 +600,6 @@ impl Chain {
         }
         out
     }
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 /// Solve the symmetric 3x3 system by Cramer's rule; `None` when singular.

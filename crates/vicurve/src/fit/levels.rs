@@ -49,6 +49,29 @@ pub enum LevelModel {
     },
 }
 
+impl std::str::FromStr for LevelModel {
+    type Err = crate::error::Error;
+    /// `global`, `varying` (the default element length) or `varying:LEN`
+    /// (elements of LEN pixels), as the command line's `--levels`. The
+    /// length is checked by [`LevelModel::validate`], not here.
+    fn from_str(s: &str) -> crate::error::Result<Self> {
+        let bad = || crate::error::Error::Parse {
+            what: format!("gray levels '{s}'"),
+            line: 0,
+            reason: "expected global, varying or varying:LEN with LEN in pixels, e.g. varying:200"
+                .into(),
+        };
+        match s.trim().split_once(':') {
+            None if s.trim() == "global" => Ok(LevelModel::Global),
+            None if s.trim() == "varying" => Ok(LevelModel::default()),
+            Some(("varying", len)) => Ok(LevelModel::Varying {
+                element_length: len.trim().parse().map_err(|_| bad())?,
+            }),
+            _ => Err(bad()),
+        }
+    }
+}
+
 impl Default for LevelModel {
     /// Varying, with elements of [`DEFAULT_LEVEL_ELEMENT`] pixels.
     fn default() -> Self {

@@ -41,7 +41,7 @@
 //! ```
 
 use super::{search_rect, smooth, threshold::Rect, StartConfig};
-use crate::curve::InitialCurve;
+use crate::curve::{dist, InitialCurve};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::interp::{Interpolation, Sampler};
@@ -153,10 +153,6 @@ fn no_line(reason: &str) -> Error {
     Error::NoLine {
         reason: reason.into(),
     }
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 /// Where and at which scale the line is strongest near the picked point.

@@ -394,6 +394,13 @@ pub fn measure_bspline_curve(
     fit_config: &FitConfig,
     config: &BsplineCurveConfig,
 ) -> Result<BsplineCurveFit> {
+    if !m.curve.corners().is_empty() {
+        // The free curve's knots are uniform: it would round the corners.
+        return Err(Error::ModelMismatch {
+            model: ShapeModel::BsplineCurve.to_string(),
+            reason: "the measured curve has corners (--break) and the free B-spline curve has uniform knots; export the measured curve itself (--dxf, --svg-curve)".into(),
+        });
+    }
     let (start, error) = start_curve(&m.points(), m.curve.is_closed(), fit_config.degree, config)?;
     let mut fit = fit_bspline_curve(
         image,
@@ -427,6 +434,11 @@ pub fn fit_bspline_curve(
         model: ShapeModel::BsplineCurve.to_string(),
         reason: reason.into(),
     };
+    if !start.basis().breaks().is_empty() {
+        return Err(mismatch(
+            "the start has repeated knots (corners); the free B-spline curve needs uniform knots",
+        ));
+    }
     let n = start.basis().n_functions();
     let p = start.basis().degree();
     let closed = start.is_closed();

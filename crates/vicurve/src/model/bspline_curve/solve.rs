@@ -280,7 +280,11 @@ pub(crate) fn levenberg_marquardt(
             mu *= 10.0;
         }
         let Some((trial, tz, ev, moved)) = accepted else {
-            // No step lowers the sum: a minimum, to rounding.
+            // No step lowers the sum: a minimum, to rounding; unless the
+            // sum itself is not a number (then no step could be judged).
+            if !cur.cost().is_finite() {
+                return end(curve, z, it, diverged(Divergence::NonFinite), cur);
+            }
             return end(curve, z, it, Outcome::Converged, cur);
         };
         (curve, z, cur) = (trial, tz, ev);
