@@ -74,17 +74,18 @@ fn measure_with(image: &Image, levels: LevelModel) -> (Measurement, ErrorStats) 
 }
 
 /// Light changing by +-35 % across the disc: with the varying levels the
-/// bias stays within 2e-3 px on a sharp edge (the bound), and within
-/// 6e-3 px blurred by 1.5 px; the global pair is off by 0.15 and 0.6 px.
-/// The levels found follow the light.
+/// bias stays within 2e-3 px (the bound) on a sharp edge and
+/// blurred by 1.5 px; the global pair is off by 0.15 and 0.6 px. The
+/// levels found follow the light.
 ///
-/// The light also tilts each plateau across the band, which the levels do
-/// not model (see `fit::levels`): a systematic error along the curve of
-/// 3.3e-3 px at most on the sharp edge, 3.8e-2 px blurred (its band is
-/// wider), bounded here.
+/// The light also tilts each plateau across the band; the pixel-edge stage
+/// measures that tilt beyond the band and models it (see
+/// `fit::correlation::tilt`). Without it the blurred disc came out
+/// -5.1e-3 px on average and 3.8e-2 px at worst; with it, -7.2e-4 and
+/// 1.1e-2 px (sharp: -8.9e-5 and 2.2e-3 px).
 #[test]
 fn disc_under_an_illumination_gradient() {
-    for (blur, max_bias, max_error) in [(0.0, 2e-3, 5e-3), (1.5, 6e-3, 5e-2)] {
+    for (blur, max_bias, max_error) in [(0.0, 2e-3, 5e-3), (1.5, 2e-3, 2e-2)] {
         let image = lit_disc(blur, 0.35, 0.0, 0);
         let (m, varying) = measure_with(&image, LevelModel::default());
         let (_, global) = measure_with(&image, LevelModel::Global);

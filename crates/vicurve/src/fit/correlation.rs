@@ -44,6 +44,7 @@
 //! No allocation happens in `iterate`: the per-thread accumulators are made
 //! once in `new`.
 
+mod tilt;
 mod varying;
 
 use crate::band::Band;
@@ -277,6 +278,12 @@ impl Correlation {
             .collect::<Result<Vec<f64>>>()?;
         let mut corr = Correlation::new(band, basis, levels)?;
         corr.pushed = Some(values);
+        // With varying levels, the light's tilt across the band too.
+        if let (Some(var), Profile::PixelEdge { blur }) =
+            (corr.varying.as_deref_mut(), corr.band.profile())
+        {
+            var.tilt = tilt::estimate(&corr.band, sampler, &var.levels, blur);
+        }
         Ok(corr)
     }
 
@@ -474,6 +481,7 @@ impl Correlation {
                 .0
         };
         if let Some(var) = &self.varying {
+            let scale = |i: usize| self.tilt_factor(i, self.displacement_at(i, lambda));
             // Dense normal equations of the levels (allocates: called a few
             // dozen times per blur fit, not per iteration).
             let lb = &var.levels;
@@ -483,14 +491,9 @@ impl Correlation {
             let mut sff = 0.0;
             for i in (0..values.len()).step_by(stride.max(1)) {
                 let (w, f) = (band.weight[i], values[i]);
-                lb.accumulate(
-                    i,
-                    w,
-                    levels::features(gamma_at(i)),
-                    f,
-                    Some(&mut mat),
-                    &mut rhs,
-                );
+                let [f0, f1] = levels::features(gamma_at(i));
+                let k = scale(i);
+                lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut mat), &mut rhs);
                 sff += w * f * f;
             }
             let b = rhs.clone();
@@ -533,6 +536,15 @@ impl Correlation {
         let a = (sgg * sf - sg * sfg) / det;
         let c = (n * sfg - sg * sf) / det;
         Some((sff - a * sf - c * sfg).max(0.0))
+    }
+
+    /// The light's tilt factor `1 + tau r` at band pixel `i` displaced by
+    /// `u` (1 without a tilt: see `tilt`).
+    fn tilt_factor(&self, i: usize, u: f64) -> f64 {
+        match self.varying.as_ref().and_then(|v| v.tilt.as_ref()) {
+            Some(t) => 1.0 + t[i] * (self.band.r[i] - u),
+            None => 1.0,
+        }
     }
 
     /// `U` at band pixel `i` for `lambda`.
@@ -617,7 +629,8 @@ impl Correlation {
                     band.normal[i],
                     band.curvature[i],
                 );
-                (values[i], gamma)
+                let k = self.tilt_factor(i, u);
+                return Some((a + c * gamma) * k - values[i]);
             }
             None => {
                 let [x, y] = band.pos[i];

@@ -128,11 +128,11 @@ impl LevelModel {
 /// Features of the levels' model at one band pixel: `1` and `gamma`.
 ///
 /// Light that changes across the image also tilts both plateaus of an edge
-/// across the band, by a different amount each; that is not modelled. Fitted
-/// jointly with the curve in the narrow last band, tilts are confounded with
-/// its position (a trial multiplied the scatter at 1 % noise); they
-/// would have to be estimated on the plateaus beyond the band and held
-/// fixed. The effect: see `tests/levels.rs`.
+/// across the band. Fitted jointly with the curve in the narrow last band,
+/// tilts are confounded with its position (a trial multiplied the scatter
+/// at 1 % noise); the pixel-edge stage instead measures the light's
+/// relative tilt on the plateaus beyond the band and holds it fixed (see
+/// `fit::correlation::tilt`; the effect: `tests/levels.rs`).
 pub(crate) const FEATURES: usize = 2;
 
 /// The features at a pixel of profile value `gamma`.

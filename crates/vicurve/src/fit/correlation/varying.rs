@@ -62,6 +62,12 @@ pub(crate) struct Varying {
     /// Per band pixel: `f` and `gamma` of the current iteration.
     fbuf: Vec<f64>,
     gbuf: Vec<f64>,
+    /// Per band pixel, pushed profile: the light's relative slope across
+    /// the curve, held fixed (see `tilt`); `None` without one.
+    pub tilt: Option<Vec<f64>>,
+    /// Per band pixel: the tilt's factor `1 + tau r` of the current
+    /// iteration (1 without tilt).
+    sbuf: Vec<f64>,
     per: usize,
     chunks: Vec<Chunk>,
     /// Scratch: `dim`, `dim^2`, `n`.
@@ -154,6 +160,8 @@ impl Varying {
             dden,
             fbuf: vec![0.0; band.len()],
             gbuf: vec![0.0; band.len()],
+            tilt: None,
+            sbuf: vec![1.0; band.len()],
             per,
             chunks: vec![chunk; count],
             t: vec![0.0; dim],
@@ -219,14 +227,16 @@ impl Correlation {
         let theta = &var.theta;
         let have_theta = var.have_theta;
         let per = var.per;
+        let tilt = var.tilt.as_deref();
         // Pass 1: f and gamma at the current displacement; the levels'
         // normal equations.
         var.chunks
             .par_iter_mut()
             .zip(var.fbuf.par_chunks_mut(per))
             .zip(var.gbuf.par_chunks_mut(per))
+            .zip(var.sbuf.par_chunks_mut(per))
             .enumerate()
-            .for_each(|(k, ((acc, fb), gb))| {
+            .for_each(|(k, (((acc, fb), gb), sb))| {
                 acc.rhs_t.fill(0.0);
                 if pushed.is_some() {
                     acc.mat_t.fill(0.0);
@@ -235,7 +245,12 @@ impl Correlation {
                 acc.outside = None;
                 acc.outside_count = 0;
                 let start = k * per;
-                for (j, (fo, go)) in fb.iter_mut().zip(gb.iter_mut()).enumerate() {
+                for (j, ((fo, go), so)) in fb
+                    .iter_mut()
+                    .zip(gb.iter_mut())
+                    .zip(sb.iter_mut())
+                    .enumerate()
+                {
                     let i = start + j;
                     let first = band.first[i] as usize;
                     let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
@@ -243,6 +258,7 @@ impl Correlation {
                     for (k, v) in vals.iter().enumerate() {
                         u += lambda[basis.index(first, k)] * v;
                     }
+                    let mut scale = 1.0;
                     let (f, gamma) = match pushed {
                         Some(values) => {
                             let (gamma, _) = profile.eval(
@@ -251,6 +267,9 @@ impl Correlation {
                                 band.normal[i],
                                 band.curvature[i],
                             );
+                            if let Some(t) = tilt {
+                                scale = 1.0 + t[i] * (band.r[i] - u);
+                            }
                             (values[i], gamma)
                         }
                         None => {
@@ -276,9 +295,12 @@ impl Correlation {
                     };
                     *fo = f;
                     *go = gamma;
+                    *so = scale;
                     let w = band.weight[i];
                     let mat = pushed.is_some().then_some(&mut acc.mat_t[..]);
-                    lb.accumulate(i, w, features(gamma), f, mat, &mut acc.rhs_t);
+                    let [f0, f1] = features(gamma);
+                    let feats = [f0 * scale, f1 * scale];
+                    lb.accumulate(i, w, feats, f, mat, &mut acc.rhs_t);
                     let s = &mut acc.sums;
                     s[0] += w;
                     s[1] += w * f;
@@ -363,7 +385,7 @@ impl Correlation {
         // side and the support-averaged contrast.
         let lb = &var.levels;
         let theta = &var.theta;
-        let (fbuf, gbuf) = (&var.fbuf, &var.gbuf);
+        let (fbuf, gbuf, sbuf) = (&var.fbuf, &var.gbuf, &var.sbuf);
         var.chunks.par_iter_mut().enumerate().for_each(|(k, acc)| {
             acc.rhs_l.fill(0.0);
             acc.dnum.fill(0.0);
@@ -376,7 +398,7 @@ impl Correlation {
                 let (a, c) = lb.levels(i, theta);
                 let w = band.weight[i];
                 let dg = band.dgamma[i];
-                let r = a + c * gbuf[i] - fbuf[i];
+                let r = (a + c * gbuf[i]) * sbuf[i] - fbuf[i];
                 let x = w * c * r * dg;
                 let y = w * dg * dg * c;
                 for (k, v) in vals.iter().enumerate() {
