@@ -428,31 +428,33 @@ pub(crate) fn cardinal_values(p: usize, t: f64, n: &mut [f64; MAX_DEGREE + 1]) {
     }
 }
 
+/// `(c0 + c1 t) q` for a polynomial `q` (coefficients of `t^0 ..`; the
+/// degree stays within `MAX_DEGREE`).
+#[allow(clippy::needless_range_loop)]
+pub(crate) fn mul_linear(q: &[f64; MAX_DEGREE + 1], c0: f64, c1: f64) -> [f64; MAX_DEGREE + 1] {
+    let mut out = [0.0; MAX_DEGREE + 1];
+    for m in 0..=MAX_DEGREE {
+        out[m] += c0 * q[m];
+        if m < MAX_DEGREE {
+            out[m + 1] += c1 * q[m];
+        }
+    }
+    out
+}
+
 /// Power-basis coefficients of the `p + 1` uniform B-spline pieces on one
 /// element: `N_k(t) = sum_m polys[k][m] t^m`, `t` in `[0, 1]`. Obtained by
-/// running the Cox–de Boor recurrence of [`cardinal_values`] on polynomials,
+/// running the Cox–de Boor recurrence of `cardinal_values` on polynomials,
 /// so the coefficients are exact up to rounding.
 #[allow(clippy::needless_range_loop)] // the indices mirror the recurrence
 pub fn cardinal_polynomials(p: usize) -> [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1] {
-    type Poly = [f64; MAX_DEGREE + 1];
-    // (c0 + c1 t) * q
-    fn mul_linear(q: &Poly, c0: f64, c1: f64) -> Poly {
-        let mut out = [0.0; MAX_DEGREE + 1];
-        for m in 0..=MAX_DEGREE {
-            out[m] += c0 * q[m];
-            if m < MAX_DEGREE {
-                out[m + 1] += c1 * q[m];
-            }
-        }
-        out
-    }
     let mut n = [[0.0; MAX_DEGREE + 1]; MAX_DEGREE + 1];
     n[0][0] = 1.0;
     for j in 1..=p {
         let inv_j = 1.0 / j as f64;
         let mut saved = [0.0; MAX_DEGREE + 1];
         for r in 0..j {
-            let temp: Poly = n[r].map(|c| c * inv_j);
+            let temp: [f64; MAX_DEGREE + 1] = n[r].map(|c| c * inv_j);
             let right = mul_linear(&temp, r as f64 + 1.0, -1.0);
             for m in 0..=MAX_DEGREE {
                 n[r][m] = saved[m] + right[m];

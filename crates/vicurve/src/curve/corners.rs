@@ -30,8 +30,9 @@
 
 /// Distance from both sides of a corner within which a pixel is left out
 /// of the band, pixels: a pixel's square reaches `sqrt(2) / 2` px from its
-/// centre, plus a margin. Measured on the square of `tests/breaks.rs`:
-/// with no clearance the two sides' ends are pulled by up to 2.3e-2 px.
+/// centre, plus a margin. Without a clearance the two sides' ends are
+/// pulled towards each other (by about 2e-2 px on the square of
+/// `tests/breaks.rs`, measured once while developing; not asserted).
 pub(crate) const CORNER_CLEARANCE: f64 = 1.0;
 /// Largest clearance radius (very sharp corners), pixels.
 const MAX_CLEARANCE_RADIUS: f64 = 8.0;

@@ -53,7 +53,7 @@ impl std::str::FromStr for LevelModel {
     type Err = crate::error::Error;
     /// `global`, `varying` (the default element length) or `varying:LEN`
     /// (elements of LEN pixels), as the command line's `--levels`. The
-    /// length is checked by [`LevelModel::validate`], not here.
+    /// length is checked when the configuration is validated, not here.
     fn from_str(s: &str) -> crate::error::Result<Self> {
         let bad = || crate::error::Error::Parse {
             what: format!("gray levels '{s}'"),

@@ -530,8 +530,9 @@ fn run_schedule(
             // not a blurred step: texture, clutter). Run it once more, this
             // time settling (its profile stays the sine, as `pixel_edge` is
             // unset), so that detail finer than the elements, such as a
-            // traced start's staircase, does not stay in the result (+-0.19
-            // px on a disc 3 px from the border, tests/realistic.rs).
+            // traced start's staircase, does not stay in the result (about
+            // +-0.2 px before on a disc 3 px from the border, seen once;
+            // tests/realistic.rs asserts the result now).
             if let (Some(chosen), true, false, Kind::Silhouette) =
                 (chosen, auto, matched_added, config.kind)
             {

@@ -65,8 +65,15 @@ const BLUR_FIT_ITERATIONS: usize = 6;
 const MU_START: f64 = 1e-6;
 const MU_MAX: f64 = 1e10;
 
-/// `(gamma, dgamma/dd)` of the profile at signed distance `d`.
-fn profile_at(profile: ModelProfile, d: f64, normal: [f64; 2], curvature: f64) -> (f64, f64) {
+/// `(gamma, dgamma/dd)` of the profile at signed distance `d` (the
+/// pixel-edge profile with its curvature shift, or the paper's profile
+/// centred `blur_variance kappa / 2` from the curve).
+pub(crate) fn profile_at(
+    profile: ModelProfile,
+    d: f64,
+    normal: [f64; 2],
+    curvature: f64,
+) -> (f64, f64) {
     match profile {
         ModelProfile::PixelEdge { blur } => {
             Profile::PixelEdge { blur }.eval(d, 1.0, normal, curvature)

@@ -32,7 +32,7 @@
 //! polynomials in the element's local coordinate `t` in `[0, 1]`, computed
 //! once by the Cox–de Boor recurrence run on polynomials.
 
-use super::MAX_DEGREE;
+use super::{mul_linear, MAX_DEGREE};
 
 /// Power-basis coefficients of the `p + 1` functions of one element.
 pub(crate) type Pieces = [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1];
@@ -181,16 +181,6 @@ impl Knotted {
     fn element_pieces(&self, p: usize, e: usize) -> Pieces {
         type Poly = [f64; MAX_DEGREE + 1];
         // (c0 + c1 t) * q
-        fn mul_linear(q: &Poly, c0: f64, c1: f64) -> Poly {
-            let mut out = [0.0; MAX_DEGREE + 1];
-            for m in 0..=MAX_DEGREE {
-                out[m] += c0 * q[m];
-                if m < MAX_DEGREE {
-                    out[m + 1] += c1 * q[m];
-                }
-            }
-            out
-        }
         let j = self.el_first[e] as isize;
         let (a, len) = (self.el_start[e], self.el_len[e]);
         let mut n: Pieces = [[0.0; MAX_DEGREE + 1]; MAX_DEGREE + 1];

@@ -23,10 +23,8 @@
 //! 1. **Start.** The B-spline measurement of the same image gives the
 //!    curve; a least-squares B-spline of the fit's degree on a uniform
 //!    basis is fitted to its samples ([`start_curve`]) with control points
-//!    [`BsplineCurveConfig::control_spacing`] px apart (default 4: a cubic
-//!    then follows an ellipse whose smallest radius of curvature is 12.7 px
-//!    within 6.2e-4 px;
-//!    finer spacing follows tighter bends but spreads the pixels, hence
+//!    [`BsplineCurveConfig::control_spacing`] px apart (default 4; finer
+//!    spacing follows tighter bends but spreads the pixels, hence
 //!    the noise, over more unknowns). The basis (knots, parameter range)
 //!    stays fixed; only the control points move. The spacing is not
 //!    chosen from the measured samples: on small shapes they wander by up
@@ -54,7 +52,7 @@
 //!    slides the curve along itself changes no distance to first order:
 //!    for a straight edge those moves are an exact null space of the
 //!    normal matrix (singular), for a curved one a near null space
-//!    (condition numbers of 1e6 and more, [`tests`](self)): without a
+//!    (ill-conditioned; the tests check the straight case): without a
 //!    constraint the control points drift along the curve wherever the
 //!    rounding or second-order terms push them. The sum of squares gets the
 //!    term `lambda sum_k (t_k . (P_k - P0_k))^2`: the control points are
@@ -581,7 +579,8 @@ fn levels(
     let (mut n, mut sg, mut sgg, mut sf, mut sfg) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (px, &u) in pixels.iter().zip(feet) {
         let pr = curve.project(px.q[0], px.q[1], u);
-        let (g, _) = solve::profile_at(problem.profile, pr.r, pr.normal, pr.curvature);
+        let (g, _) =
+            crate::model::solve::profile_at(problem.profile, pr.r, pr.normal, pr.curvature);
         n += 1.0;
         sg += g;
         sgg += g * g;

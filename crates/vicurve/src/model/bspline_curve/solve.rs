@@ -43,31 +43,7 @@ pub(crate) struct Pixel {
     pub f: f64,
 }
 
-/// `(gamma, dgamma/dd)` of the profile at signed distance `d` (as the
-/// parametric models: the pixel-edge profile with its curvature shift, or
-/// the paper's profile centred `blur_variance kappa / 2` from the curve).
-pub(crate) fn profile_at(
-    profile: ModelProfile,
-    d: f64,
-    normal: [f64; 2],
-    curvature: f64,
-) -> (f64, f64) {
-    match profile {
-        ModelProfile::PixelEdge { blur } => {
-            Profile::PixelEdge { blur }.eval(d, 1.0, normal, curvature)
-        }
-        ModelProfile::Paper {
-            kind,
-            half_width,
-            blur_variance,
-        } => Profile::Paper { kind }.eval(
-            d - 0.5 * blur_variance * curvature,
-            half_width,
-            normal,
-            0.0,
-        ),
-    }
-}
+use crate::model::solve::profile_at;
 
 /// The fixed parts of the problem.
 pub(crate) struct Problem<'a> {
