@@ -208,15 +208,18 @@ mod tests {
             let want = normal_cdf(x);
             // Relative in the lower half (the tail; the rounding of the
             // exponential's argument x^2 / 2 is relative to it), absolute
-            // in the upper one (1 minus the tail, rounded).
+            // in the upper one (1 minus the tail, rounded). Below 1e-300
+            // the values are subnormal or nearly so (x < -37) and keep
+            // fewer significant digits than any relative bound; nothing
+            // there weighs in a fit.
             let tol = if x < 0.0 {
-                1e-15 * (1.0 + 0.5 * x * x) * want
+                1e-15 * (1.0 + 0.5 * x * x) * want + 1e-300
             } else {
                 5e-16
             };
             proptest::prop_assert!((cdf - want).abs() <= tol, "{x}: {cdf} vs {want}");
             let p = normal_pdf(x);
-            proptest::prop_assert!((pdf - p).abs() <= 2e-16 * p, "{x}: {pdf} vs {p}");
+            proptest::prop_assert!((pdf - p).abs() <= 2e-16 * p + 1e-300, "{x}: {pdf} vs {p}");
         }
     }
 
