@@ -225,9 +225,9 @@ pub fn measure_frame(
     };
     let path_text = path.display().to_string();
     // One prepared image per interpolation, prepared when a fit first asks
-    // for it: the tracking schedule needs no interpolation (bilinear, the
-    // plain copy), and the cubic prefilter of a whole frame would cost more
-    // than its fit.
+    // for it: the tracking schedule needs no interpolation (bilinear, which
+    // shares the image's pixels), and the cubic prefilter of a whole frame
+    // would cost more than its fit.
     let samplers: Vec<(Interpolation, OnceLock<Sampler>)> = Interpolation::ALL
         .iter()
         .map(|&k| (k, OnceLock::new()))

@@ -175,10 +175,12 @@ fn main() {
                     .iter()
                     .map(|s| {
                         format!(
-                            "R {} x {} el: {} it, {:.1} ms",
+                            "R {} x {} el: {} it, {} rr, {} px, {:.1} ms",
                             s.half_width,
                             s.elements,
                             s.iterations,
+                            s.rereferences,
+                            s.band_pixels,
                             s.seconds * 1e3
                         )
                     })

@@ -46,6 +46,7 @@ use crate::levelset::LevelsetCoords;
 use crate::spline::{Basis, MAX_DEGREE};
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
+use std::cell::RefCell;
 
 /// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
 /// out: too close to (or beyond) the centre of curvature.
@@ -235,10 +236,18 @@ impl Band {
         let gy1 = ((bb[3] + reach).ceil().min(height as f64 - 1.0)).max(0.0) as usize;
         let gw = gx1 + 1 - gx0;
         let gh = gy1 + 1 - gy0;
-        // Per cell: squared distance to the closest chord and the parameter
-        // of its foot, as f32 (a starting point for Newton; half the memory
-        // to clear and fault in than f64).
-        let mut best = vec![(f32::INFINITY, 0.0f32); gw * gh];
+        // Per cell: one plus the squared distance to the closest chord and
+        // the parameter of its foot, as f32 bits packed in a u64 (a starting
+        // point for Newton). Zero marks a cell no chord reached. The cells
+        // reached are listed in `touched`, so that neither clearing nor
+        // scanning costs the bounding box's area, and the grid is the
+        // thread's, kept zeroed between bands (a fresh one would cost a page
+        // fault per row the curve crosses).
+        let mut best = GRID.with(|g| std::mem::take(&mut *g.borrow_mut()));
+        if best.len() < gw * gh {
+            best = vec![0u64; gw * gh];
+        }
+        let mut touched: Vec<u32> = Vec::new();
         let dir = |k: usize| {
             let a = verts[k % verts.len()];
             let b = verts[(k + 1) % verts.len()];
@@ -316,8 +325,13 @@ impl Band {
                     let ey = py - t * d[1];
                     let d2 = ex * ex + ey * ey;
                     let cell = row + x - gx0;
-                    if (d2 as f32) < best[cell].0 {
-                        best[cell] = (d2 as f32, (ua + t * (ub - ua)) as f32);
+                    let key = (1.0 + d2) as f32;
+                    let old = best[cell];
+                    if old == 0 {
+                        touched.push(cell as u32);
+                    }
+                    if old == 0 || key < unpack(old).0 {
+                        best[cell] = pack(key, (ua + t * (ub - ua)) as f32);
                     }
                 }
             }
@@ -337,17 +351,20 @@ impl Band {
         let weight = thin_weight(thin);
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let clearances = curve.corner_clearances();
-        (0..gh)
-            .into_par_iter()
-            .map(|j| {
+        // Raster order, whatever order the chords reached the cells in.
+        touched.sort_unstable();
+        let rows = touched
+            .par_chunks(TOUCHED_CHUNK)
+            .map(|cells| {
                 let mut out = Vec::new();
-                for i in 0..gw {
+                for &cell in cells {
+                    let cell = cell as usize;
+                    let (i, j) = (cell % gw, cell / gw);
                     if thinned_out(thin, gx0 + i, gy0 + j) {
                         continue;
                     }
-                    let cell = j * gw + i;
-                    let (d2, u0) = best[cell];
-                    if f64::from(d2) > cutoff2 {
+                    let (key, u0) = unpack(best[cell]);
+                    if f64::from(key) - 1.0 > cutoff2 {
                         continue;
                     }
                     let x = (gx0 + i) as f64;
@@ -381,7 +398,14 @@ impl Band {
                 }
                 out
             })
-            .collect()
+            .collect();
+        for &cell in &touched {
+            best[cell as usize] = 0;
+        }
+        if best.len() <= MAX_KEPT_GRID {
+            GRID.with(|g| *g.borrow_mut() = best);
+        }
+        rows
     }
 
     /// The band pixels with levelset coordinates, row by row (raster
@@ -508,6 +532,30 @@ fn thin_weight(thin: usize) -> f64 {
         2 | 3 => 2.0,
         _ => 4.0,
     }
+}
+
+thread_local! {
+    /// The grid of [`Band::exact_rows`], all zero between bands.
+    static GRID: RefCell<Vec<u64>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Cells of a grid a thread keeps for its next band (128 MB); a larger one
+/// is freed.
+const MAX_KEPT_GRID: usize = 1 << 24;
+
+/// Cells of the band's grid per parallel task of the exact projection.
+const TOUCHED_CHUNK: usize = 2048;
+
+/// Two `f32` in one `u64` (the first in the high half).
+#[inline]
+fn pack(a: f32, b: f32) -> u64 {
+    (u64::from(a.to_bits()) << 32) | u64::from(b.to_bits())
+}
+
+/// The two `f32` of [`pack`].
+#[inline]
+fn unpack(v: u64) -> (f32, f32) {
+    (f32::from_bits((v >> 32) as u32), f32::from_bits(v as u32))
 }
 
 /// Whether pixel `(x, y)` is left out when one in `thin` is kept.

@@ -11,13 +11,18 @@
 //! is accepted.
 
 use crate::error::{Error, Result};
+use std::sync::Arc;
 
 /// A grayscale image, stored row after row.
+///
+/// The pixels are shared, not copied, with a bilinear
+/// [`crate::interp::Sampler`] made from the image (and with clones of it);
+/// [`Image::data_mut`] copies them first when they are shared.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     width: usize,
     height: usize,
-    data: Vec<f64>,
+    data: Arc<Vec<f64>>,
 }
 
 impl Image {
@@ -48,7 +53,7 @@ impl Image {
         Ok(Image {
             width,
             height,
-            data,
+            data: Arc::new(data),
         })
     }
 
@@ -66,7 +71,7 @@ impl Image {
         Image {
             width,
             height,
-            data,
+            data: Arc::new(data),
         }
     }
 
@@ -87,7 +92,12 @@ impl Image {
 
     /// The pixels, row after row, mutable. The caller keeps them finite.
     pub fn data_mut(&mut self) -> &mut [f64] {
-        &mut self.data
+        Arc::make_mut(&mut self.data).as_mut_slice()
+    }
+
+    /// The pixels, shared (see the type's docs).
+    pub(crate) fn shared_data(&self) -> Arc<Vec<f64>> {
+        Arc::clone(&self.data)
     }
 
     /// The gray level of the pixel at column `x`, row `y`.

@@ -4,7 +4,9 @@
 //! so [`Sampler::value`] and [`Sampler::value_gradient`] are inlined,
 //! allocation-free and nearly branch-free: all preparation (copying the image
 //! into a mirrored, padded buffer and, for cubic B-splines, the prefilter) is
-//! done once in [`Sampler::new`].
+//! done once in [`Sampler::new`]. A bilinear sampler, whose stencil never
+//! leaves the image, shares the image's pixels instead (no copy: tracking
+//! reads only pixel values, see [`crate::fit::measure_tracked`]).
 //!
 //! Coordinates are pixels with pixel centres at integers (see
 //! [`crate::image`]); the interpolants are defined on
@@ -15,6 +17,7 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
@@ -98,18 +101,29 @@ pub struct Sampler {
     /// that cell's, not the (mirrored, zero-mean) one beyond.
     cell_x_max: usize,
     cell_y_max: usize,
-    /// Row length of `coef`: `width + 2 PAD`.
+    /// Row length of `coef`: `width + 2 pad`.
     stride: usize,
+    /// Padding of `coef` on each side: `PAD`, or 0 for a bilinear sampler
+    /// (its stencil never leaves the image), which then shares the image's
+    /// pixels.
+    pad: usize,
     /// Pixel values (bilinear, Keys) or spline coefficients (cubic
-    /// B-spline), mirrored into a `(width + 2 PAD) x (height + 2 PAD)` frame.
-    coef: Vec<f64>,
+    /// B-spline), mirrored into a `(width + 2 pad) x (height + 2 pad)`
+    /// frame.
+    coef: Arc<Vec<f64>>,
 }
 
 impl Sampler {
     /// Prepares `image` for interpolation of the given kind: `O(w h)` time,
-    /// one padded copy of the image in memory.
+    /// one padded copy of the image in memory; bilinear interpolation
+    /// instead shares the image's pixels (no copy, constant time).
     pub fn new(image: &Image, kind: Interpolation) -> Self {
         let (w, h) = (image.width(), image.height());
+        // The bilinear stencil of a point in the domain stays in the image
+        // (`cell_x_max`, `cell_y_max`) when both sides have two pixels.
+        if kind == Interpolation::Bilinear && w >= 2 && h >= 2 {
+            return Sampler::with_coef(kind, w, h, 0, image.shared_data());
+        }
         // Only the prefilter needs a copy of its own (bilinear and Keys read
         // the pixel values themselves): one megapixel copied is ~1 ms.
         let filtered;
@@ -134,6 +148,16 @@ impl Sampler {
             coef.extend_from_slice(row);
             coef.extend(right.iter().map(|&j| row[j]));
         }
+        Sampler::with_coef(kind, w, h, PAD, Arc::new(coef))
+    }
+
+    fn with_coef(
+        kind: Interpolation,
+        w: usize,
+        h: usize,
+        pad: usize,
+        coef: Arc<Vec<f64>>,
+    ) -> Sampler {
         Sampler {
             kind,
             width: w,
@@ -142,7 +166,8 @@ impl Sampler {
             y_max: (h - 1) as f64,
             cell_x_max: w.max(2) - 2,
             cell_y_max: h.max(2) - 2,
-            stride,
+            stride: w + 2 * pad,
+            pad,
             coef,
         }
     }
@@ -184,6 +209,23 @@ impl Sampler {
         })
     }
 
+    /// The recorded gray level of the pixel whose centre is `(x, y)`
+    /// (integers; the same as [`Sampler::value`] there, which every
+    /// interpolation kind reproduces, but read directly when the sampler
+    /// keeps the pixel values: bilinear and Keys). `None` outside the image.
+    #[inline]
+    pub fn pixel(&self, x: usize, y: usize) -> Option<f64> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        Some(match self.kind {
+            Interpolation::Bilinear | Interpolation::Keys => {
+                self.coef[(y + self.pad) * self.stride + x + self.pad]
+            }
+            Interpolation::CubicBSpline => self.cubic_value(x as f64, y as f64, bspline_weights),
+        })
+    }
+
     /// Interpolated gray level and its gradient `[d/dx, d/dy]` (gray levels
     /// per pixel) at `(x, y)`; same domain as [`Sampler::value`]. For
     /// bilinear interpolation, on a pixel centre line where the gradient
@@ -208,7 +250,7 @@ impl Sampler {
         let ix = (x as usize).min(self.cell_x_max);
         let iy = (y as usize).min(self.cell_y_max);
         let (tx, ty) = (x - ix as f64, y - iy as f64);
-        let k = (iy + PAD) * self.stride + ix + PAD;
+        let k = (iy + self.pad) * self.stride + ix + self.pad;
         let top = &self.coef[k..k + 2];
         let bottom = &self.coef[k + self.stride..k + self.stride + 2];
         let (dtop, dbottom) = (top[1] - top[0], bottom[1] - bottom[0]);

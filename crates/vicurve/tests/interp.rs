@@ -355,3 +355,37 @@ fn names_round_trip() {
     );
     assert!("bicubic".parse::<Interpolation>().is_err());
 }
+
+proptest! {
+    /// `pixel` reads the recorded value, as `value` interpolates it at the
+    /// pixel centre, for every kind and image size (including one-pixel
+    /// sides, where a bilinear sampler keeps a padded copy); `None` outside.
+    #[test]
+    fn pixel_is_the_value_at_the_centre(img in random_image(7)) {
+        for kind in KINDS {
+            let s = Sampler::new(&img, kind);
+            for y in 0..img.height() {
+                for x in 0..img.width() {
+                    let p = s.pixel(x, y).unwrap();
+                    prop_assert!((p - img.get(x, y)).abs() < 1e-9, "{kind:?} ({x}, {y})");
+                    let v = s.value(x as f64, y as f64).unwrap();
+                    prop_assert!((p - v).abs() < 1e-9, "{kind:?} ({x}, {y})");
+                }
+            }
+            prop_assert!(s.pixel(img.width(), 0).is_none());
+            prop_assert!(s.pixel(0, img.height()).is_none());
+        }
+    }
+}
+
+/// A bilinear sampler shares the image's pixels; changing the image
+/// afterwards copies them first, so the sampler keeps what it was made from.
+#[test]
+fn a_sampler_keeps_its_pixels_when_the_image_changes() {
+    let mut img = image_from(4, 3, |x, y| x + 10.0 * y);
+    let s = Sampler::new(&img, Interpolation::Bilinear);
+    img.data_mut()[5] = -1.0;
+    assert_eq!(img.get(1, 1), -1.0);
+    assert_eq!(s.pixel(1, 1), Some(11.0));
+    assert!((s.value(1.5, 1.0).unwrap() - 11.5).abs() < 1e-12);
+}

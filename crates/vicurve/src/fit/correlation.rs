@@ -269,11 +269,14 @@ impl Correlation {
             .pos
             .iter()
             .map(|&[x, y]| {
-                sampler.value(x, y).ok_or(Error::BandOutsideImage {
-                    x,
-                    y,
-                    half_width: band.half_width(),
-                })
+                // Band pixels are pixel centres: no interpolation.
+                sampler
+                    .pixel(x as usize, y as usize)
+                    .ok_or(Error::BandOutsideImage {
+                        x,
+                        y,
+                        half_width: band.half_width(),
+                    })
             })
             .collect::<Result<Vec<f64>>>()?;
         let mut corr = Correlation::new(band, basis, levels)?;
@@ -486,16 +489,18 @@ impl Correlation {
             // dozen times per blur fit, not per iteration).
             let lb = &var.levels;
             let dim = lb.dim();
-            let mut mat = vec![0.0; dim * dim];
+            let mut blocks = vec![0.0; lb.blocks_len()];
             let mut rhs = vec![0.0; dim];
             let mut sff = 0.0;
             for i in (0..values.len()).step_by(stride.max(1)) {
                 let (w, f) = (band.weight[i], values[i]);
                 let [f0, f1] = levels::features(gamma_at(i));
                 let k = scale(i);
-                lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut mat), &mut rhs);
+                lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut blocks), &mut rhs);
                 sff += w * f * f;
             }
+            let mut mat = vec![0.0; dim * dim];
+            lb.scatter(&blocks, &mut mat);
             let b = rhs.clone();
             DenseCholesky::factor(&mat, dim)
                 .ok()?

@@ -169,7 +169,8 @@ pub fn measure_tracked_from(
 /// (the previous frame's, [`TrackState::from_measurement`]) is given and
 /// it can, else with `config`'s schedule from `start`. Prepares the image
 /// as each needs it: no interpolation for the tracking schedule (a bilinear
-/// sampler, which is a copy), `config`'s interpolation for the other.
+/// sampler, which shares the image's pixels), `config`'s interpolation for
+/// the other.
 ///
 /// Errors: those of [`measure_from`].
 pub fn measure_tracked(

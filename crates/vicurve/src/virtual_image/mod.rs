@@ -22,6 +22,7 @@
 //! the curvature shift of a blurred one.
 
 pub mod pixel_edge;
+mod psi;
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI};

@@ -83,7 +83,10 @@ pub(crate) fn estimate(
                 // contrast at d px), which would pass for a slope.
                 let (px, py) = ((foot[0] + t * nx).round(), (foot[1] + t * ny).round());
                 let r = (px - foot[0]) * nx + (py - foot[1]) * ny;
-                let v = sampler.value(px, py)?;
+                if px < 0.0 || py < 0.0 {
+                    return None;
+                }
+                let v = sampler.pixel(px as usize, py as usize)?;
                 s1 += 1.0;
                 sr += r;
                 srr += r * r;

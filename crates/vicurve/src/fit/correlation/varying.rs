@@ -11,19 +11,21 @@
 use super::{Correlation, Step, StepFailure, MAX_OUTSIDE};
 use crate::band::Band;
 use crate::error::{Error, Result};
-use crate::fit::levels::{features, LevelBasis, FEATURES};
+use crate::fit::levels::{features, LevelBasis};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::{BandCholesky, DenseCholesky};
 use crate::spline::Basis;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Partial sums of one chunk of band pixels.
 #[derive(Clone, Debug)]
 struct Chunk {
     /// Levels' right-hand side, `dim`.
     rhs_t: Vec<f64>,
-    /// Levels' normal matrix, `dim^2` (pushed profile only).
+    /// Levels' normal matrix as per-element blocks (pushed profile only,
+    /// see [`LevelBasis::accumulate`]).
     mat_t: Vec<f64>,
     /// Displacement right-hand side `sum w c r dg N_i`, `n`.
     rhs_l: Vec<f64>,
@@ -74,6 +76,9 @@ pub(crate) struct Varying {
     t: Vec<f64>,
     mat: Vec<f64>,
     d: Vec<f64>,
+    /// The band of `Y K^-1 Y^T` (`n` rows of `2p + 1`, see
+    /// [`Varying::variance_term`]), made on first use.
+    variance_band: OnceLock<Vec<f64>>,
 }
 
 impl Varying {
@@ -90,6 +95,7 @@ impl Varying {
         let dim = levels.dim();
         let mut b = vec![0.0; n * dim];
         let mut s_mat = vec![0.0; dim * dim];
+        let mut s_blocks = vec![0.0; levels.blocks_len()];
         let mut dden = vec![0.0; n];
         let mut tmp = vec![0.0; dim];
         let width = levels.width();
@@ -97,7 +103,7 @@ impl Varying {
             let w = band.weight[i];
             let (g, dg) = (band.gamma[i], band.dgamma[i]);
             let feats = features(g);
-            levels.accumulate(i, w, feats, 0.0, Some(&mut s_mat), &mut tmp);
+            levels.accumulate(i, w, feats, 0.0, Some(&mut s_blocks), &mut tmp);
             let first = band.first[i] as usize;
             let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
             let lfirst = levels.first[i] as usize;
@@ -114,6 +120,7 @@ impl Varying {
                 }
             }
         }
+        levels.scatter(&s_blocks, &mut s_mat);
         let mut y = b.clone();
         for col in y.chunks_mut(n) {
             chol.solve_in_place(col);
@@ -140,7 +147,7 @@ impl Varying {
         let count = band.len().div_ceil(per);
         let chunk = Chunk {
             rhs_t: vec![0.0; dim],
-            mat_t: vec![0.0; dim * dim],
+            mat_t: vec![0.0; levels.blocks_len()],
             rhs_l: vec![0.0; n],
             dnum: vec![0.0; n],
             sums: [0.0; 9],
@@ -167,6 +174,7 @@ impl Varying {
             t: vec![0.0; dim],
             mat: vec![0.0; dim * dim],
             d: vec![0.0; n],
+            variance_band: OnceLock::new(),
         })
     }
 
@@ -179,22 +187,57 @@ impl Varying {
     }
 
     /// `q(s)` term of the levels in the variance of `U(s)`: `(Y^T N)^T
-    /// K^-1 (Y^T N)` for the displacement functions `vals` from `first`.
+    /// K^-1 (Y^T N)` for the displacement functions `vals` from `first`,
+    /// i.e. `N^T W N` with `W = Y K^-1 Y^T`. Only the band of `W` that two
+    /// functions sharing an element reach is needed: it is made once (`n`
+    /// solves with the levels' `dim x dim` factor), after which each call
+    /// costs `(p + 1)^2` products instead of a dense solve.
     pub fn variance_term(&self, basis: &Basis, first: usize, vals: &[f64]) -> f64 {
-        let n = basis.n_functions();
-        let dim = self.levels.dim();
-        let mut t = [0.0; MAX_DIM];
-        let mut z = [0.0; MAX_DIM];
-        for (col, tc) in t[..dim].iter_mut().enumerate() {
-            *tc = vals
-                .iter()
-                .enumerate()
-                .map(|(k, v)| v * self.y[col * n + basis.index(first, k)])
-                .sum();
+        let p = basis.degree();
+        let w = 2 * p + 1;
+        let band = self
+            .variance_band
+            .get_or_init(|| self.make_variance_band(basis));
+        let mut q = 0.0;
+        for (k, vk) in vals.iter().enumerate() {
+            let row = &band[basis.index(first, k) * w..][..w];
+            for (l, vl) in vals.iter().enumerate() {
+                q += vk * vl * row[l + p - k];
+            }
         }
-        z[..dim].copy_from_slice(&t[..dim]);
-        self.k_factor.solve_in_place(&mut z[..dim]);
-        t[..dim].iter().zip(&z[..dim]).map(|(a, b)| a * b).sum()
+        q
+    }
+
+    /// The band of `W = Y K^-1 Y^T`: row `i`, entry `d + p` is `W_{i, i+d}`
+    /// (the index taken around a closed curve), `|d| <= p`.
+    fn make_variance_band(&self, basis: &Basis) -> Vec<f64> {
+        let n = basis.n_functions();
+        let p = basis.degree() as isize;
+        let dim = self.levels.dim();
+        let w = (2 * p + 1) as usize;
+        let mut z = vec![0.0; n * dim];
+        for (i, zi) in z.chunks_mut(dim).enumerate() {
+            for (a, v) in zi.iter_mut().enumerate() {
+                *v = self.y[a * n + i];
+            }
+            self.k_factor.solve_in_place(zi);
+        }
+        let mut out = vec![0.0; n * w];
+        for i in 0..n {
+            for d in -p..=p {
+                let j = i as isize + d;
+                let j = if basis.is_closed() {
+                    j.rem_euclid(n as isize)
+                } else if (0..n as isize).contains(&j) {
+                    j
+                } else {
+                    continue;
+                } as usize;
+                out[i * w + (d + p) as usize] =
+                    (0..dim).map(|a| z[i * dim + a] * self.y[a * n + j]).sum();
+            }
+        }
+        out
     }
 
     /// `(a, c)` at parameter `u` of the reference, from the last iteration.
@@ -202,10 +245,6 @@ impl Varying {
         self.levels.levels_at(u, &self.theta)
     }
 }
-
-/// Most level coefficients.
-const MAX_DIM: usize =
-    FEATURES * (crate::fit::levels::MAX_LEVEL_ELEMENTS + crate::spline::MAX_DEGREE);
 
 impl Correlation {
     /// [`Correlation::iterate`] with varying levels.
@@ -332,9 +371,7 @@ impl Correlation {
                 *t += v;
             }
             if pushed.is_some() {
-                for (t, v) in var.mat.iter_mut().zip(&acc.mat_t) {
-                    *t += v;
-                }
+                var.levels.scatter(&acc.mat_t, &mut var.mat);
             }
         }
         // The global pair, for the polarity and contrast checks.
@@ -477,5 +514,69 @@ impl Correlation {
             residual_rms: (ssr / n).sqrt(),
             max_step,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::band::Band;
+    use crate::curve::InitialCurve;
+    use crate::fit::correlation::Correlation;
+    use crate::fit::levels::LevelModel;
+    use crate::spline::{Basis, MAX_DEGREE};
+    use crate::virtual_image::Kind;
+
+    /// The band of `Y K^-1 Y^T` against the dense solve it replaces, on a
+    /// closed and an open curve.
+    #[test]
+    fn variance_band_matches_the_dense_solve() {
+        let starts = [
+            InitialCurve::Circle {
+                cx: 100.0,
+                cy: 100.0,
+                r: 60.0,
+            },
+            InitialCurve::Segment {
+                x0: 20.0,
+                y0: 40.0,
+                x1: 180.0,
+                y1: 150.0,
+            },
+        ];
+        for init in starts {
+            let curve = init.to_curve().unwrap();
+            let l = curve.param_length();
+            let basis = Basis::new(3, 12, l, curve.is_closed()).unwrap();
+            let band = Band::build(&curve, &basis, 3.0, Kind::Silhouette, 200, 200).unwrap();
+            let levels = LevelModel::Varying {
+                element_length: 30.0,
+            };
+            let corr = Correlation::new(band, basis.clone(), levels).unwrap();
+            let var = corr.varying.as_deref().unwrap();
+            let (n, dim) = (basis.n_functions(), var.levels.dim());
+            for k in 0..97 {
+                let u = (k as f64 + 0.5) / 97.0 * l;
+                let mut v = [0.0; MAX_DEGREE + 1];
+                let first = basis.eval(u, &mut v);
+                let vals = &v[..4];
+                let fast = var.variance_term(&basis, first, vals);
+                let t: Vec<f64> = (0..dim)
+                    .map(|col| {
+                        vals.iter()
+                            .enumerate()
+                            .map(|(k, v)| v * var.y[col * n + basis.index(first, k)])
+                            .sum()
+                    })
+                    .collect();
+                let mut z = t.clone();
+                var.k_factor.solve_in_place(&mut z);
+                let direct: f64 = t.iter().zip(&z).map(|(a, b)| a * b).sum();
+                assert!(direct > 0.0);
+                assert!(
+                    (fast - direct).abs() <= 1e-9 * direct,
+                    "{u}: {fast} vs {direct}"
+                );
+            }
+        }
     }
 }
