@@ -15,10 +15,11 @@
 //! `Psi2` over the trapezoid's four corners, and its density as the same
 //! difference of `Psi1`.
 //!
-//! `Phi` and `phi` share one exponential (`normal_cdf_pdf`): the
-//! profile is evaluated at every band pixel in every iteration of the
-//! pixel-edge stage, and `erfc` from `libm` spends two more exponentials of
-//! its own.
+//! The profile is evaluated at every band pixel in every iteration of the
+//! pixel-edge stage, so `Psi1` and `Psi2` come from a table
+//! (`virtual_image/psi.rs`); the direct formula, where `Phi` and `phi` share one
+//! exponential (`normal_cdf_pdf`; `erfc` from `libm` would spend two more),
+//! builds that table and is the tests' reference.
 //!
 //! Edge cases: an axis-aligned edge (`nx` or `ny` zero) is a limit of the
 //! formula (0/0); widths are raised to 0.02 px and the blur to 0.03 px,
@@ -135,7 +136,7 @@ const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 
 /// `(P(T <= t), density of T at t)` for `T` the pixel's extent along the
 /// normal `(nx, ny)` plus a Gaussian blur of `sigma_b` pixels (module docs).
-/// `Psi2` and `Psi1` come from their table ([`super::psi`]): within
+/// `Psi2` and `Psi1` come from their table (`virtual_image/psi.rs`): within
 /// `1e-9 (1 + sigma_b^2)` of the direct formula (tested).
 #[inline]
 pub fn pixel_edge_cdf(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {

@@ -5,7 +5,7 @@
 //! are the pieces of the pixel-edge profile ([`super::pixel_edge`]), which
 //! is evaluated at every band pixel in every iteration of the pixel-edge
 //! stage. Computed directly they cost an exponential and a rational function
-//! each (about 25 ns); here they are a quintic polynomial per table
+//! each; here they are a quintic polynomial per table
 //! interval, found by Hermite interpolation of the exact values and their
 //! first two derivatives at the nodes (`Psi2' = Psi1`, `Psi2'' = Psi1' =
 //! Phi`, `Psi1'' = phi`): a table of 9 kB, built once, and ten fused
