@@ -140,10 +140,16 @@ fn star_and_open_edge_noiseless() {
                 let (m, f) = fit(&image, &init, &BsplineCurveConfig::default());
                 let (worst, mean) = errors(&f, &shape);
                 let agree = distance_to_measurement(&f, &m);
+                // The measured curve's error, densely along it (between its
+                // samples too, as `agree` measures distances to the curve).
                 let m_worst = m
-                    .samples
-                    .iter()
-                    .map(|s| shape.signed_distance(s.x, s.y).abs())
+                    .curve
+                    .sample_params((m.curve.param_length() / 0.25).ceil() as usize)
+                    .into_iter()
+                    .map(|u| {
+                        let q = m.curve.point(u);
+                        shape.signed_distance(q[0], q[1]).abs()
+                    })
                     .fold(0.0, f64::max);
                 println!(
                     "{name}, blur {blur}, {bits}-bit: max error {worst:.1e} px (mean {mean:+.1e}; measurement {m_worst:.1e}), max distance to the measurement {agree:.1e} px, {} control points (start off by {:.1e}), slide {:.1e} px, {} iterations, {} passes",

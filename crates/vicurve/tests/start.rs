@@ -51,7 +51,7 @@ fn max_gap(a: &Measurement, b: &Measurement) -> f64 {
 /// different starts (the automatic one and a circle that crosses it) gives
 /// the same curve, within 0.01 px everywhere; both are accurate. Noiseless:
 /// with noise the two fits, whose knots fall at different places along the
-/// curve, differ by their noise too (2.5e-2 px at most with 1 % noise, where
+/// curve, differ by their noise too (1.5e-2 px at most with 1 % noise, where
 /// each scatters 7e-3 px about the truth).
 #[test]
 fn star_from_the_automatic_start_and_from_a_circle() {

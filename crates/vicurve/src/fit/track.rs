@@ -12,7 +12,8 @@
 //! curve as in the full schedule (a change of more than 0.01 px runs the
 //! stage again), and the stage settles as the full schedule's last stage
 //! does (it re-references on its own result until the displacement
-//! vanishes), so the result is the same fixed point whatever the start.
+//! vanishes), so the result is the same fixed point whatever the start
+//! (to about 1e-3 px: see `SETTLE_TOLERANCE`).
 //! Within a frame the blur is refitted until a refit confirms it (the full
 //! schedule refits it after every settling run), and on a narrower bracket
 //! than the full schedule's (`refit_blur`). When the previous frame
