@@ -46,7 +46,7 @@ use crate::levelset::LevelsetCoords;
 use crate::spline::{Basis, MAX_DEGREE};
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
-use std::cell::RefCell;
+use std::sync::Mutex;
 
 /// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
 /// out: too close to (or beyond) the centre of curvature.
@@ -238,104 +238,55 @@ impl Band {
         let gh = gy1 + 1 - gy0;
         // Per cell: one plus the squared distance to the closest chord and
         // the parameter of its foot, as f32 bits packed in a u64 (a starting
-        // point for Newton). Zero marks a cell no chord reached. The cells
-        // reached are listed in `touched`, so that neither clearing nor
-        // scanning costs the bounding box's area, and the grid is the
-        // thread's, kept zeroed between bands (a fresh one would cost a page
-        // fault per row the curve crosses).
-        let mut best = GRID.with(|g| std::mem::take(&mut *g.borrow_mut()));
-        if best.len() < gw * gh {
-            best = vec![0u64; gw * gh];
-        }
-        let mut touched: Vec<u32> = Vec::new();
-        let dir = |k: usize| {
-            let a = verts[k % verts.len()];
-            let b = verts[(k + 1) % verts.len()];
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let len = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-12);
-            [d[0] / len, d[1] / len]
+        // point for Newton); the smaller packed value wins, so the grid does
+        // not depend on the order of the chords. Zero marks a cell no chord
+        // reached. The cells reached are listed in `touched`, so that neither
+        // clearing nor scanning costs the bounding box's area, and the grids
+        // are kept zeroed in a pool between bands (a fresh one would cost a
+        // page fault per row the curve crosses). The chords are rasterised
+        // in `GRID_PARTS` runs in parallel, each on its own grid, merged
+        // after.
+        let grid = GridShape {
+            gx0,
+            gy0,
+            gx1,
+            gy1,
+            gw,
+            reach,
         };
-        for k in 0..nseg {
-            let a = verts[k];
-            let b = verts[(k + 1) % verts.len()];
-            let ua = params[k];
-            let ub = if k + 1 < params.len() {
-                params[k + 1]
-            } else {
-                l
-            };
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            let dd = (len * len).max(1e-300);
-            // Only the pixels whose foot falls on this chord (give or take
-            // `ext`) can have it as their closest chord. `ext` covers the
-            // wedge between this chord's rectangle and its neighbours' on the
-            // convex side, which widens with the distance and the turning.
-            let t = dir(k);
-            let turn = |j: usize| {
-                let o = dir(j);
-                (t[0] * o[1] - t[1] * o[0]).abs().asin()
-            };
-            let prev = if k > 0 || curve.is_closed() {
-                turn(k + nseg - 1)
-            } else {
-                0.0
-            };
-            let next = if k + 1 < nseg || curve.is_closed() {
-                turn(k + 1)
-            } else {
-                0.0
-            };
-            let ext = 1.0 + reach * prev.max(next).min(1.0) * 2.0;
-            let (lo, hi) = (-ext, len + ext);
-            let n = [-t[1], t[0]];
-            let y_lo = ((a[1].min(b[1]) - reach - ext).floor().max(gy0 as f64)) as usize;
-            let y_hi = ((a[1].max(b[1]) + reach + ext).ceil().min(gy1 as f64)) as usize;
-            for y in y_lo..=y_hi {
-                let py = y as f64 - a[1];
-                // x-range where (X - a).t in [lo, hi] and |(X - a).n| <= reach.
-                let mut x_min = f64::NEG_INFINITY;
-                let mut x_max = f64::INFINITY;
-                for (axis, (mn, mx)) in [(t, (lo, hi)), (n, (-reach, reach))] {
-                    let rest = py * axis[1];
-                    if axis[0].abs() < 1e-12 {
-                        if rest < mn || rest > mx {
-                            x_min = f64::INFINITY;
-                        }
-                        continue;
-                    }
-                    let e0 = (mn - rest) / axis[0];
-                    let e1 = (mx - rest) / axis[0];
-                    x_min = x_min.max(e0.min(e1));
-                    x_max = x_max.min(e0.max(e1));
-                }
-                if x_min > x_max {
-                    continue;
-                }
-                let x_lo = ((a[0] + x_min).floor().max(gx0 as f64)) as usize;
-                let x_hi = (a[0] + x_max).ceil().min(gx1 as f64);
-                if x_hi < x_lo as f64 {
-                    continue;
-                }
-                let row = (y - gy0) * gw;
-                for x in x_lo..=x_hi as usize {
-                    let px = x as f64 - a[0];
-                    let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
-                    let ex = px - t * d[0];
-                    let ey = py - t * d[1];
-                    let d2 = ex * ex + ey * ey;
-                    let cell = row + x - gx0;
-                    let key = (1.0 + d2) as f32;
-                    let old = best[cell];
-                    if old == 0 {
-                        touched.push(cell as u32);
-                    }
-                    if old == 0 || key < unpack(old).0 {
-                        best[cell] = pack(key, (ua + t * (ub - ua)) as f32);
-                    }
+        let chords = Chords {
+            verts: &verts,
+            params: &params,
+            nseg,
+            closed: curve.is_closed(),
+            length: l,
+        };
+        let per = nseg.div_ceil(GRID_PARTS).max(1);
+        let mut parts: Vec<(Vec<u64>, Vec<u32>)> = (0..GRID_PARTS)
+            .into_par_iter()
+            .map(|part| {
+                let mut best = take_grid(gw * gh);
+                let mut touched = Vec::new();
+                let range = (part * per).min(nseg)..((part + 1) * per).min(nseg);
+                chords.rasterize(range, &grid, &mut best, &mut touched);
+                (best, touched)
+            })
+            .collect();
+        let (mut best, mut touched) = parts.remove(0);
+        for (mut other, cells) in parts {
+            for cell in cells {
+                let c = cell as usize;
+                let v = std::mem::take(&mut other[c]);
+                if best[c] == 0 {
+                    touched.push(cell);
+                    best[c] = v;
+                } else {
+                    best[c] = best[c].min(v);
                 }
             }
+            keep_grid(other);
         }
+        let dir = |k: usize| chords.dir(k);
 
         // Refine on the exact curve, row by row in parallel (raster order kept).
         // The polyline is within its largest sagitta of the curve (about
@@ -352,7 +303,7 @@ impl Band {
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let clearances = curve.corner_clearances();
         // Raster order, whatever order the chords reached the cells in.
-        touched.sort_unstable();
+        touched.par_sort_unstable();
         let rows = touched
             .par_chunks(TOUCHED_CHUNK)
             .map(|cells| {
@@ -402,9 +353,7 @@ impl Band {
         for &cell in &touched {
             best[cell as usize] = 0;
         }
-        if best.len() <= MAX_KEPT_GRID {
-            GRID.with(|g| *g.borrow_mut() = best);
-        }
+        keep_grid(best);
         rows
     }
 
@@ -534,14 +483,164 @@ fn thin_weight(thin: usize) -> f64 {
     }
 }
 
-thread_local! {
-    /// The grid of [`Band::exact_rows`], all zero between bands.
-    static GRID: RefCell<Vec<u64>> = const { RefCell::new(Vec::new()) };
+/// Grids of [`Band::exact_rows`] kept for the next bands, all zero.
+static GRIDS: Mutex<Vec<Vec<u64>>> = Mutex::new(Vec::new());
+
+/// Cells of a grid kept for the next band (128 MB); a larger one is freed.
+const MAX_KEPT_GRID: usize = 1 << 24;
+/// Grids kept at most.
+const MAX_KEPT_GRIDS: usize = 8;
+/// Parallel runs of the chords' rasterisation.
+const GRID_PARTS: usize = 2;
+
+/// A zeroed grid of at least `cells` cells, from the pool when it has one.
+fn take_grid(cells: usize) -> Vec<u64> {
+    let kept = GRIDS.lock().ok().and_then(|mut g| g.pop());
+    match kept {
+        Some(g) if g.len() >= cells => g,
+        _ => vec![0; cells],
+    }
 }
 
-/// Cells of a grid a thread keeps for its next band (128 MB); a larger one
-/// is freed.
-const MAX_KEPT_GRID: usize = 1 << 24;
+/// Return a grid, all zero again, to the pool.
+fn keep_grid(grid: Vec<u64>) {
+    if grid.len() <= MAX_KEPT_GRID {
+        if let Ok(mut g) = GRIDS.lock() {
+            if g.len() < MAX_KEPT_GRIDS {
+                g.push(grid);
+            }
+        }
+    }
+}
+
+/// Where [`Chords::rasterize`] writes: the grid's box of pixel centres
+/// `[gx0, gx1] x [gy0, gy1]`, `gw` cells per row, and how far from a chord
+/// it looks, pixels.
+struct GridShape {
+    gx0: usize,
+    gy0: usize,
+    gx1: usize,
+    gy1: usize,
+    gw: usize,
+    reach: f64,
+}
+
+/// The polyline of a curve: vertices at parameters `params`, `nseg`
+/// chords (closing back to the first vertex when closed).
+struct Chords<'a> {
+    verts: &'a [[f64; 2]],
+    params: &'a [f64],
+    nseg: usize,
+    closed: bool,
+    length: f64,
+}
+
+impl Chords<'_> {
+    /// Unit direction of chord `k` (wrapping around).
+    fn dir(&self, k: usize) -> [f64; 2] {
+        let n = self.verts.len();
+        let a = self.verts[k % n];
+        let b = self.verts[(k + 1) % n];
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-12);
+        [d[0] / len, d[1] / len]
+    }
+
+    /// Write, for every cell near chords `range`, the smaller of its value
+    /// and the packed (squared distance, foot parameter) of the chord; the
+    /// cells first reached go to `touched`.
+    fn rasterize(
+        &self,
+        range: std::ops::Range<usize>,
+        grid: &GridShape,
+        best: &mut [u64],
+        touched: &mut Vec<u32>,
+    ) {
+        let (verts, params, nseg) = (self.verts, self.params, self.nseg);
+        let reach = grid.reach;
+        for k in range {
+            let a = verts[k];
+            let b = verts[(k + 1) % verts.len()];
+            let ua = params[k];
+            let ub = if k + 1 < params.len() {
+                params[k + 1]
+            } else {
+                self.length
+            };
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let dd = (len * len).max(1e-300);
+            // Only the pixels whose foot falls on this chord (give or take
+            // `ext`) can have it as their closest chord. `ext` covers the
+            // wedge between this chord's rectangle and its neighbours' on the
+            // convex side, which widens with the distance and the turning.
+            let t = self.dir(k);
+            let turn = |j: usize| {
+                let o = self.dir(j);
+                (t[0] * o[1] - t[1] * o[0]).abs().asin()
+            };
+            let prev = if k > 0 || self.closed {
+                turn(k + nseg - 1)
+            } else {
+                0.0
+            };
+            let next = if k + 1 < nseg || self.closed {
+                turn(k + 1)
+            } else {
+                0.0
+            };
+            let ext = 1.0 + reach * prev.max(next).min(1.0) * 2.0;
+            let (lo, hi) = (-ext, len + ext);
+            let n = [-t[1], t[0]];
+            let y_lo = ((a[1].min(b[1]) - reach - ext).floor().max(grid.gy0 as f64)) as usize;
+            let y_hi = ((a[1].max(b[1]) + reach + ext).ceil().min(grid.gy1 as f64)) as usize;
+            for y in y_lo..=y_hi {
+                let py = y as f64 - a[1];
+                // x-range where (X - a).t in [lo, hi] and |(X - a).n| <= reach.
+                let mut x_min = f64::NEG_INFINITY;
+                let mut x_max = f64::INFINITY;
+                for (axis, (mn, mx)) in [(t, (lo, hi)), (n, (-reach, reach))] {
+                    let rest = py * axis[1];
+                    if axis[0].abs() < 1e-12 {
+                        if rest < mn || rest > mx {
+                            x_min = f64::INFINITY;
+                        }
+                        continue;
+                    }
+                    let e0 = (mn - rest) / axis[0];
+                    let e1 = (mx - rest) / axis[0];
+                    x_min = x_min.max(e0.min(e1));
+                    x_max = x_max.min(e0.max(e1));
+                }
+                if x_min > x_max {
+                    continue;
+                }
+                let x_lo = ((a[0] + x_min).floor().max(grid.gx0 as f64)) as usize;
+                let x_hi = (a[0] + x_max).ceil().min(grid.gx1 as f64);
+                if x_hi < x_lo as f64 {
+                    continue;
+                }
+                let row = (y - grid.gy0) * grid.gw;
+                for x in x_lo..=x_hi as usize {
+                    let px = x as f64 - a[0];
+                    let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
+                    let ex = px - t * d[0];
+                    let ey = py - t * d[1];
+                    let d2 = ex * ex + ey * ey;
+                    let cell = row + x - grid.gx0;
+                    let packed = pack((1.0 + d2) as f32, (ua + t * (ub - ua)) as f32);
+                    let old = best[cell];
+                    if old == 0 {
+                        touched.push(cell as u32);
+                        best[cell] = packed;
+                    } else if packed < old {
+                        best[cell] = packed;
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// Cells of the band's grid per parallel task of the exact projection.
 const TOUCHED_CHUNK: usize = 2048;

@@ -22,6 +22,7 @@ mod project;
 pub use init::InitialCurve;
 
 use crate::error::{Error, Result};
+use crate::solver::chunked::chunked_sum;
 use crate::solver::{BandCholesky, SymBandMatrix};
 use crate::spline::{Basis, MAX_DEGREE};
 use serde::{Deserialize, Serialize};
@@ -229,21 +230,38 @@ impl SplineCurve {
         breaks.dedup_by(|a, b| a.at == b.at);
         let basis = Basis::with_breaks(degree, n_el, length, closed, &breaks)?;
         let n = basis.n_functions();
-        let mut m = SymBandMatrix::zeros(n, degree, closed)?;
-        let mut rhs_x = vec![0.0; n];
-        let mut rhs_y = vec![0.0; n];
-        let mut v = [0.0; MAX_DEGREE + 1];
-        for (p, &u) in pts.iter().zip(&params) {
-            let first = basis.eval(u, &mut v);
-            for a in 0..=degree {
-                let ia = basis.index(first, a);
-                rhs_x[ia] += v[a] * p[0];
-                rhs_y[ia] += v[a] * p[1];
-                for b in a..=degree {
-                    m.add(ia, basis.index(first, b), v[a] * v[b]);
+        // The normal equations, summed over fixed chunks of points in
+        // parallel (`solver::chunked`: the same bits on every run).
+        let zero = SymBandMatrix::zeros(n, degree, closed)?;
+        let (mut m, mut rhs_x, mut rhs_y) = chunked_sum(
+            pts.len(),
+            |range| {
+                let mut m = zero.clone();
+                let mut rhs_x = vec![0.0; n];
+                let mut rhs_y = vec![0.0; n];
+                let mut v = [0.0; MAX_DEGREE + 1];
+                for (p, &u) in pts[range.clone()].iter().zip(&params[range]) {
+                    let first = basis.eval(u, &mut v);
+                    for a in 0..=degree {
+                        let ia = basis.index(first, a);
+                        rhs_x[ia] += v[a] * p[0];
+                        rhs_y[ia] += v[a] * p[1];
+                        for b in a..=degree {
+                            m.add(ia, basis.index(first, b), v[a] * v[b]);
+                        }
+                    }
                 }
-            }
-        }
+                (m, rhs_x, rhs_y)
+            },
+            |t, part| {
+                t.0.add_matrix(&part.0);
+                t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
+                t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
+            },
+        )
+        .ok_or_else(|| Error::InvalidCurve {
+            reason: "no points".into(),
+        })?;
         let scale = (0..n).map(|i| m.get(i, i)).fold(0.0, f64::max);
         let lambda = 1e-10 * scale.max(1e-300);
         let pairs = if closed { n } else { n - 1 };

@@ -46,6 +46,7 @@ use super::{displaced_point, REFERENCE_SAMPLE_STEP};
 use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::{Error, Result};
 use crate::spline::{Basis, Break, MAX_DEGREE};
+use rayon::prelude::*;
 
 /// Degree of the reference curves built here (as in `displaced`).
 const REFERENCE_DEGREE: usize = 3;
@@ -260,7 +261,7 @@ pub(crate) fn displaced_samples(
     if corners.is_empty() {
         let count = (l / step).ceil() as usize;
         let params = reference.sample_params(if closed { count } else { count + 1 });
-        let pts = params.iter().map(|&u| at(u)).collect();
+        let pts = params.par_iter().map(|&u| at(u)).collect();
         return (params, pts, Vec::new());
     }
     // Pieces between consecutive bounds; the corner after each piece.

@@ -52,6 +52,7 @@ use crate::error::{Error, Result};
 use crate::fit::levels::{self, LevelModel};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
+use crate::solver::chunked::chunked_sum;
 use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Profile;
@@ -157,29 +158,47 @@ impl Correlation {
                 unknowns: n + 2,
             });
         }
-        let mut m = SymBandMatrix::zeros(n, p, basis.is_closed())?;
-        let mut g1 = vec![0.0; n];
-        let mut g2 = vec![0.0; n];
-        let (mut sum_w, mut sum_g, mut sum_gg) = (0.0, 0.0, 0.0);
-        for i in 0..band.len() {
-            let first = band.first[i] as usize;
-            let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-            let w = band.weight[i];
-            let dg = band.dgamma[i];
-            let g = band.gamma[i];
-            sum_w += w;
-            sum_g += w * g;
-            sum_gg += w * g * g;
-            for a in 0..=p {
-                let ia = basis.index(first, a);
-                g1[ia] += w * dg * vals[a];
-                g2[ia] += w * g * dg * vals[a];
-                let wa = w * dg * dg * vals[a];
-                for (b, vb) in vals.iter().enumerate().skip(a) {
-                    m.add(ia, basis.index(first, b), wa * vb);
+        // Assembled over fixed chunks of pixels in parallel (`solver::chunked`).
+        let zero = SymBandMatrix::zeros(n, p, basis.is_closed())?;
+        let (m, g1, g2, [sum_w, sum_g, sum_gg]) = chunked_sum(
+            band.len(),
+            |range| {
+                let mut m = zero.clone();
+                let mut g1 = vec![0.0; n];
+                let mut g2 = vec![0.0; n];
+                let mut sums = [0.0; 3];
+                for i in range {
+                    let first = band.first[i] as usize;
+                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                    let w = band.weight[i];
+                    let dg = band.dgamma[i];
+                    let g = band.gamma[i];
+                    sums[0] += w;
+                    sums[1] += w * g;
+                    sums[2] += w * g * g;
+                    for a in 0..=p {
+                        let ia = basis.index(first, a);
+                        g1[ia] += w * dg * vals[a];
+                        g2[ia] += w * g * dg * vals[a];
+                        let wa = w * dg * dg * vals[a];
+                        for (b, vb) in vals.iter().enumerate().skip(a) {
+                            m.add(ia, basis.index(first, b), wa * vb);
+                        }
+                    }
                 }
-            }
-        }
+                (m, g1, g2, sums)
+            },
+            |t, part| {
+                t.0.add_matrix(&part.0);
+                t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
+                t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
+                t.3.iter_mut().zip(part.3).for_each(|(a, b)| *a += b);
+            },
+        )
+        .ok_or(Error::EmptyBand {
+            pixels: band.len(),
+            unknowns: n + 2,
+        })?;
         let chol = BandCholesky::factor(&m)?;
         let mut y1 = g1.clone();
         let mut y2 = g2.clone();
@@ -265,20 +284,21 @@ impl Correlation {
     /// Errors: those of `new`, and [`Error::BandOutsideImage`] when a band
     /// pixel has no value.
     fn new_pushed(band: Band, basis: Basis, sampler: &Sampler, levels: LevelModel) -> Result<Self> {
-        let values = band
+        // Band pixels are pixel centres: no interpolation.
+        let read: Vec<Option<f64>> = band
             .pos
-            .iter()
-            .map(|&[x, y]| {
-                // Band pixels are pixel centres: no interpolation.
-                sampler
-                    .pixel(x as usize, y as usize)
-                    .ok_or(Error::BandOutsideImage {
-                        x,
-                        y,
-                        half_width: band.half_width(),
-                    })
-            })
-            .collect::<Result<Vec<f64>>>()?;
+            .par_iter()
+            .map(|&[x, y]| sampler.pixel(x as usize, y as usize))
+            .collect();
+        if let Some(i) = read.iter().position(Option::is_none) {
+            let [x, y] = band.pos[i];
+            return Err(Error::BandOutsideImage {
+                x,
+                y,
+                half_width: band.half_width(),
+            });
+        }
+        let values: Vec<f64> = read.into_iter().flatten().collect();
         let mut corr = Correlation::new(band, basis, levels)?;
         corr.pushed = Some(values);
         // With varying levels, the light's tilt across the band too.
@@ -483,22 +503,35 @@ impl Correlation {
                 .eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i])
                 .0
         };
+        let stride = stride.max(1);
+        let count = values.len().div_ceil(stride);
         if let Some(var) = &self.varying {
             let scale = |i: usize| self.tilt_factor(i, self.displacement_at(i, lambda));
             // Dense normal equations of the levels (allocates: called a few
-            // dozen times per blur fit, not per iteration).
+            // times per blur fit, not per iteration).
             let lb = &var.levels;
             let dim = lb.dim();
-            let mut blocks = vec![0.0; lb.blocks_len()];
-            let mut rhs = vec![0.0; dim];
-            let mut sff = 0.0;
-            for i in (0..values.len()).step_by(stride.max(1)) {
-                let (w, f) = (band.weight[i], values[i]);
-                let [f0, f1] = levels::features(gamma_at(i));
-                let k = scale(i);
-                lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut blocks), &mut rhs);
-                sff += w * f * f;
-            }
+            let (blocks, mut rhs, sff) = chunked_sum(
+                count,
+                |range| {
+                    let mut blocks = vec![0.0; lb.blocks_len()];
+                    let mut rhs = vec![0.0; dim];
+                    let mut sff = 0.0;
+                    for i in range.map(|k| k * stride) {
+                        let (w, f) = (band.weight[i], values[i]);
+                        let [f0, f1] = levels::features(gamma_at(i));
+                        let k = scale(i);
+                        lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut blocks), &mut rhs);
+                        sff += w * f * f;
+                    }
+                    (blocks, rhs, sff)
+                },
+                |total, part| {
+                    total.0.iter_mut().zip(&part.0).for_each(|(t, p)| *t += p);
+                    total.1.iter_mut().zip(&part.1).for_each(|(t, p)| *t += p);
+                    total.2 += part.2;
+                },
+            )?;
             let mut mat = vec![0.0; dim * dim];
             lb.scatter(&blocks, &mut mat);
             let b = rhs.clone();
@@ -508,13 +541,11 @@ impl Correlation {
             let fit: f64 = b.iter().zip(&rhs).map(|(u, v)| u * v).sum();
             return Some((sff - fit).max(0.0));
         }
-        let zero = [0.0; 6];
-        let sums = (0..values.len())
-            .into_par_iter()
-            .step_by(stride.max(1))
-            .fold(
-                || zero,
-                |mut acc, i| {
+        let sums = chunked_sum(
+            count,
+            |range| {
+                let mut acc = [0.0; 6];
+                for i in range.map(|k| k * stride) {
                     let g = gamma_at(i);
                     let (w, f) = (band.weight[i], values[i]);
                     for (a, v) in
@@ -523,16 +554,11 @@ impl Correlation {
                     {
                         *a += v;
                     }
-                    acc
-                },
-            )
-            .reduce(
-                || zero,
-                |mut a, b| {
-                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-                    a
-                },
-            );
+                }
+                acc
+            },
+            |total, part| total.iter_mut().zip(part).for_each(|(t, p)| *t += p),
+        )?;
         let [n, sg, sgg, sf, sfg, sff] = sums;
         let det = n * sgg - sg * sg;
         if det.is_nan() || det <= 0.0 {
@@ -662,15 +688,13 @@ impl Correlation {
         // variance of the estimate is then about 2 / NOISE_PIXELS relative.
         // Pixels the robust weights rejected (clutter) are left out.
         let stride = band.len().div_ceil(NOISE_PIXELS).max(1);
-        let mut res: Vec<(f64, f64)> = Vec::with_capacity(band.len() / stride + 1);
-        for i in (0..band.len()).step_by(stride) {
-            if self.robust[i] < 0.5 {
-                continue;
-            }
-            if let Some(v) = self.residual(i, lambda, sampler) {
-                res.push((band.r[i], v));
-            }
-        }
+        // In parallel; `collect` keeps the pixels' order.
+        let mut res: Vec<(f64, f64)> = (0..band.len().div_ceil(stride))
+            .into_par_iter()
+            .map(|k| k * stride)
+            .filter(|&i| self.robust[i] >= 0.5)
+            .filter_map(|i| Some((band.r[i], self.residual(i, lambda, sampler)?)))
+            .collect();
         if res.len() < 3 {
             return None;
         }

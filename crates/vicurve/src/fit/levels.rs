@@ -24,6 +24,7 @@
 
 use crate::error::Result;
 use crate::spline::{Basis, MAX_DEGREE};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// How the virtual image's gray levels may vary along the curve.
@@ -160,13 +161,21 @@ impl LevelBasis {
     /// Evaluate `basis` at the band pixels' parameters `s`.
     pub fn new(basis: Basis, s: &[f64]) -> Self {
         let w = basis.degree() + 1;
-        let mut first = Vec::with_capacity(s.len());
-        let mut vals = Vec::with_capacity(s.len() * w);
-        let mut v = [0.0; MAX_DEGREE + 1];
-        for &u in s {
-            first.push(basis.eval(u, &mut v) as u32);
-            vals.extend_from_slice(&v[..w]);
-        }
+        let mut first = vec![0; s.len()];
+        let mut vals = vec![0.0; s.len() * w];
+        // In parallel: each pixel's values are its own.
+        const CHUNK: usize = 1024;
+        first
+            .par_chunks_mut(CHUNK)
+            .zip(vals.par_chunks_mut(CHUNK * w))
+            .zip(s.par_chunks(CHUNK))
+            .for_each(|((first, vals), s)| {
+                let mut v = [0.0; MAX_DEGREE + 1];
+                for ((f, out), &u) in first.iter_mut().zip(vals.chunks_exact_mut(w)).zip(s) {
+                    *f = basis.eval(u, &mut v) as u32;
+                    out.copy_from_slice(&v[..w]);
+                }
+            });
         LevelBasis { basis, first, vals }
     }
 

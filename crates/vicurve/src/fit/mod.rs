@@ -41,6 +41,7 @@ use crate::psf;
 use crate::spline::{Basis, MAX_DEGREE};
 use crate::virtual_image::{Kind, Profile};
 use correlation::{Correlation, StepFailure};
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
 
@@ -855,11 +856,14 @@ fn robust_refit(
         // Detection on a regular subsample (a crossing wire still leaves
         // several of its pixels in it); all residuals only when needed.
         let stride = corr.band.len().div_ceil(ROBUST_PROBE_PIXELS).max(1);
-        let probe: Vec<f64> = (0..corr.band.len()).step_by(stride).map(residual).collect();
+        let probe: Vec<f64> = (0..corr.band.len().div_ceil(stride))
+            .into_par_iter()
+            .map(|k| residual(k * stride))
+            .collect();
         let Some(scale) = clutter_scale(&probe, s.c) else {
             break;
         };
-        let res: Vec<f64> = (0..corr.band.len()).map(residual).collect();
+        let res: Vec<f64> = (0..corr.band.len()).into_par_iter().map(residual).collect();
         let robust: Vec<f64> = res.iter().map(|v| tukey_weight(*v, scale)).collect();
         let mut band = corr.band.clone();
         for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
@@ -1045,7 +1049,6 @@ impl Final {
         let closed = self.reference.is_closed();
         let (params, mut pts, corners) =
             breaks::displaced_samples(&self.reference, &self.corr.basis, &self.lambda, fine_step);
-        let mut scratch = vec![0.0; self.corr.n_unknowns()];
         let mut curve =
             SplineCurve::fit_with_corners(&pts, closed, degree, CURVE_SPACING, &corners)?;
         let mut s = chord_lengths(&pts);
@@ -1082,34 +1085,49 @@ impl Final {
         };
         let max_chord = s.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
         let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
-        let mut fit_error: f64 = 0.0;
-        let mut out = Vec::with_capacity(pts.len() / every + 2);
         let mut levels = Vec::new();
-        let mut next_level = 0.0;
-        for (i, q) in pts.iter().enumerate() {
-            let last = !closed && i + 1 == pts.len();
-            if self.corr.varying_levels() && (s[i] >= next_level || last) {
-                if let Some((a, c)) = self.corr.levels_at(params[i]) {
-                    levels.push(LevelSample { s: s[i], a, c });
+        if self.corr.varying_levels() {
+            let mut next_level = 0.0;
+            for (i, &u) in params.iter().enumerate() {
+                let last = !closed && i + 1 == pts.len();
+                if s[i] >= next_level || last {
+                    if let Some((a, c)) = self.corr.levels_at(u) {
+                        levels.push(LevelSample { s: s[i], a, c });
+                    }
+                    next_level = s[i] + LEVEL_SAMPLE_SPACING;
                 }
-                next_level = s[i] + LEVEL_SAMPLE_SPACING;
-            }
-            let on_curve = curve.point(s[i]);
-            fit_error = fit_error.max(crate::curve::dist(on_curve, *q));
-            let keep = i % every == 0 || (!closed && i + 1 == pts.len());
-            if keep {
-                let f = curve.frame(s[i]);
-                out.push(Sample {
-                    s: s[i],
-                    x: q[0],
-                    y: q[1],
-                    nx: f.normal[0],
-                    ny: f.normal[1],
-                    sigma: self.corr.position_sigma(params[i], &mut scratch),
-                    weight: weight_at(params[i]),
-                });
             }
         }
+        // In parallel (each point's values are its own; a maximum does not
+        // depend on the order).
+        let fit_error = pts
+            .par_iter()
+            .zip(&s)
+            .map(|(q, &si)| crate::curve::dist(curve.point(si), *q))
+            .reduce(|| 0.0, f64::max);
+        let kept: Vec<usize> = (0..pts.len())
+            .filter(|&i| i % every == 0 || (!closed && i + 1 == pts.len()))
+            .collect();
+        let n = self.corr.n_unknowns();
+        let out: Vec<Sample> = kept
+            .par_iter()
+            .map_init(
+                || vec![0.0; n],
+                |scratch, &i| {
+                    let q = pts[i];
+                    let f = curve.frame(s[i]);
+                    Sample {
+                        s: s[i],
+                        x: q[0],
+                        y: q[1],
+                        nx: f.normal[0],
+                        ny: f.normal[1],
+                        sigma: self.corr.position_sigma(params[i], scratch),
+                        weight: weight_at(params[i]),
+                    }
+                },
+            )
+            .collect();
         Ok((curve, fit_error, out, levels))
     }
 }
@@ -1184,7 +1202,7 @@ fn displaced(
     let closed = reference.is_closed();
     let params = reference.sample_params(if closed { count } else { count + 1 });
     let pts: Vec<[f64; 2]> = params
-        .iter()
+        .par_iter()
         .map(|&u| displaced_point(reference, basis, lambda, u))
         .collect();
     let curve = SplineCurve::fit(&pts, closed, 3, spacing)?;

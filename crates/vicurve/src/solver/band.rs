@@ -150,6 +150,22 @@ impl SymBandMatrix {
         }
     }
 
+    /// `M += other`, entry by entry (partial sums of one matrix assembled
+    /// in parallel). Panics unless `other` has the same size, half-bandwidth
+    /// and closure.
+    pub fn add_matrix(&mut self, other: &SymBandMatrix) {
+        assert!(
+            self.n == other.n
+                && self.half_bandwidth == other.half_bandwidth
+                && self.cyclic == other.cyclic,
+            "add_matrix: the matrices differ in shape"
+        );
+        self.data
+            .iter_mut()
+            .zip(&other.data)
+            .for_each(|(a, b)| *a += b);
+    }
+
     /// Sets every entry to 0, keeping the storage (to reuse the matrix from
     /// one iteration to the next without allocating).
     pub fn fill_zero(&mut self) {

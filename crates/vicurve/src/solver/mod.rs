@@ -12,9 +12,12 @@
 //!   cyclic case (banded `L` plus `p` dense last rows, an "arrow").
 //! - [`DenseCholesky`] is a plain dense factorisation, used as a reference in
 //!   tests and for tiny systems.
+//! - `chunked` sums the pixels' contributions to a system in parallel, in
+//!   fixed chunks, so that the sum has the same bits on every run.
 
 mod band;
 mod cholesky;
+pub(crate) mod chunked;
 mod dense;
 
 pub use band::SymBandMatrix;

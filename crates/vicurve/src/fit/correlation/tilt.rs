@@ -31,7 +31,9 @@
 use crate::band::Band;
 use crate::fit::levels::LevelBasis;
 use crate::interp::Sampler;
+use crate::solver::chunked::chunked_sum;
 use crate::solver::DenseCholesky;
+use rayon::prelude::*;
 
 /// Width of each plateau sampled, pixels.
 const PLATEAU_WIDTH: f64 = 4.0;
@@ -60,63 +62,43 @@ pub(crate) fn estimate(
     let count = (PLATEAU_WIDTH / PLATEAU_STEP).round() as usize + 1;
     let m = levels.m();
     let width = levels.width();
-    let mut mat = vec![0.0; m * m];
     // Right-hand sides of the three fits: both sides together, the outer
-    // side alone, the inner side alone.
-    let mut rhs = [vec![0.0; m], vec![0.0; m], vec![0.0; m]];
-    let mut used = Vec::new();
-    for i in 0..band.len() {
-        let r0 = band.r[i];
-        if r0.abs() > 0.5 {
-            continue;
-        }
-        let [x, y] = band.pos[i];
-        let [nx, ny] = band.normal[i];
-        let foot = [x - r0 * nx, y - r0 * ny];
-        let side = |sign: f64| -> Option<(f64, f64)> {
-            // Least-squares line v = alpha + beta r over the plateau.
-            let (mut s1, mut sr, mut srr, mut sv, mut srv) = (0.0, 0.0, 0.0, 0.0, 0.0);
-            for k in 0..count {
-                let t = sign * (r_in + k as f64 * PLATEAU_STEP);
-                // The nearest pixel centre: between centres the cubic
-                // interpolant rings after the edge (by ~0.27^d of the
-                // contrast at d px), which would pass for a slope.
-                let (px, py) = ((foot[0] + t * nx).round(), (foot[1] + t * ny).round());
-                let r = (px - foot[0]) * nx + (py - foot[1]) * ny;
-                if px < 0.0 || py < 0.0 {
-                    return None;
+    // side alone, the inner side alone. Accumulated over fixed chunks of
+    // pixels in parallel (`solver::chunked`).
+    let sums = chunked_sum(
+        band.len(),
+        |range| {
+            let mut mat = vec![0.0; m * m];
+            let mut rhs = [vec![0.0; m], vec![0.0; m], vec![0.0; m]];
+            let mut used = Vec::new();
+            for i in range {
+                let Some(taus) = pixel_tilts(band, sampler, i, r_in, count) else {
+                    continue;
+                };
+                let first = levels.first[i] as usize;
+                let vals = &levels.vals[i * width..(i + 1) * width];
+                for (k, vk) in vals.iter().enumerate() {
+                    let jk = levels.basis.index(first, k);
+                    for (r, t) in rhs.iter_mut().zip(taus) {
+                        r[jk] += vk * t;
+                    }
+                    for (l, vl) in vals.iter().enumerate() {
+                        mat[jk * m + levels.basis.index(first, l)] += vk * vl;
+                    }
                 }
-                let v = sampler.pixel(px as usize, py as usize)?;
-                s1 += 1.0;
-                sr += r;
-                srr += r * r;
-                sv += v;
-                srv += r * v;
+                used.push(i);
             }
-            let det = s1 * srr - sr * sr;
-            (det > 0.0).then(|| ((srr * sv - sr * srv) / det, (s1 * srv - sr * sv) / det))
-        };
-        let (Some((a_out, b_out)), Some((a_in, b_in))) = (side(1.0), side(-1.0)) else {
-            continue;
-        };
-        let level = a_out + a_in;
-        if level == 0.0 || a_out == 0.0 || a_in == 0.0 {
-            continue;
-        }
-        let taus = [(b_out + b_in) / level, b_out / a_out, b_in / a_in];
-        let first = levels.first[i] as usize;
-        let vals = &levels.vals[i * width..(i + 1) * width];
-        for (k, vk) in vals.iter().enumerate() {
-            let jk = levels.basis.index(first, k);
-            for (r, t) in rhs.iter_mut().zip(taus) {
-                r[jk] += vk * t;
+            (mat, rhs, used)
+        },
+        |t, mut part| {
+            t.0.iter_mut().zip(&part.0).for_each(|(a, b)| *a += b);
+            for (r, q) in t.1.iter_mut().zip(&part.1) {
+                r.iter_mut().zip(q).for_each(|(a, b)| *a += b);
             }
-            for (l, vl) in vals.iter().enumerate() {
-                mat[jk * m + levels.basis.index(first, l)] += vk * vl;
-            }
-        }
-        used.push(i);
-    }
+            t.2.append(&mut part.2);
+        },
+    );
+    let (mat, mut rhs, used) = sums?;
     // At least a few estimates per function of the basis.
     if used.len() < 4 * m {
         return None;
@@ -145,8 +127,62 @@ pub(crate) fn estimate(
     if !consistent {
         return None;
     }
-    let tilt: Vec<f64> = (0..band.len()).map(|i| at(&rhs[0], i)).collect();
+    let tilt: Vec<f64> = (0..band.len())
+        .into_par_iter()
+        .map(|i| at(&rhs[0], i))
+        .collect();
     tilt.iter()
         .all(|t: &f64| t.is_finite() && t.abs() <= MAX_TILT)
         .then_some(tilt)
+}
+
+/// The three relative tilts `[both sides, outer side, inner side]`
+/// estimated at band pixel `i` (module docs), or `None` when it is not near
+/// the curve or a plateau leaves the image. `r_in`: where the plateau
+/// samples start, pixels; `count`: samples per plateau.
+fn pixel_tilts(
+    band: &Band,
+    sampler: &Sampler,
+    i: usize,
+    r_in: f64,
+    count: usize,
+) -> Option<[f64; 3]> {
+    let r0 = band.r[i];
+    if r0.abs() > 0.5 {
+        return None;
+    }
+    let [x, y] = band.pos[i];
+    let [nx, ny] = band.normal[i];
+    let foot = [x - r0 * nx, y - r0 * ny];
+    let side = |sign: f64| -> Option<(f64, f64)> {
+        // Least-squares line v = alpha + beta r over the plateau.
+        let (mut s1, mut sr, mut srr, mut sv, mut srv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for k in 0..count {
+            let t = sign * (r_in + k as f64 * PLATEAU_STEP);
+            // The nearest pixel centre: between centres the cubic
+            // interpolant rings after the edge (by ~0.27^d of the
+            // contrast at d px), which would pass for a slope.
+            let (px, py) = ((foot[0] + t * nx).round(), (foot[1] + t * ny).round());
+            let r = (px - foot[0]) * nx + (py - foot[1]) * ny;
+            if px < 0.0 || py < 0.0 {
+                return None;
+            }
+            let v = sampler.pixel(px as usize, py as usize)?;
+            s1 += 1.0;
+            sr += r;
+            srr += r * r;
+            sv += v;
+            srv += r * v;
+        }
+        let det = s1 * srr - sr * sr;
+        (det > 0.0).then(|| ((srr * sv - sr * srv) / det, (s1 * srv - sr * sv) / det))
+    };
+    let (Some((a_out, b_out)), Some((a_in, b_in))) = (side(1.0), side(-1.0)) else {
+        return None;
+    };
+    let level = a_out + a_in;
+    if level == 0.0 || a_out == 0.0 || a_in == 0.0 {
+        return None;
+    }
+    Some([(b_out + b_in) / level, b_out / a_out, b_in / a_in])
 }
