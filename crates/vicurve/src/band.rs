@@ -227,7 +227,26 @@ impl Band {
             verts.len() - 1
         };
 
-        let reach = half_width + step + 1.0;
+        let chords = Chords {
+            verts: &verts,
+            params: &params,
+            nseg,
+            closed: curve.is_closed(),
+            length: l,
+        };
+        // The polyline is within its largest sagitta of the curve (about
+        // chord * turning angle / 8; bounded by a quarter for safety): a
+        // pixel within `half_width` of the curve is within `half_width +
+        // sagitta` of its nearest chord, which the grid below reaches with
+        // a pixel to spare; only such pixels need the exact projection.
+        let turns = if curve.is_closed() { nseg } else { nseg - 1 };
+        let sagitta = (0..turns)
+            .map(|k| {
+                let (t0, t1) = (chords.dir(k), chords.dir(k + 1));
+                step * (t0[0] * t1[1] - t0[1] * t1[0]).abs().asin() / 4.0
+            })
+            .fold(0.0, f64::max);
+        let reach = half_width + sagitta + 1.0;
         // The control polygon's box contains the curve and its polyline.
         let bb = curve.bounding_box();
         let gx0 = ((bb[0] - reach).floor().max(0.0)) as usize;
@@ -254,13 +273,6 @@ impl Band {
             gw,
             reach,
         };
-        let chords = Chords {
-            verts: &verts,
-            params: &params,
-            nseg,
-            closed: curve.is_closed(),
-            length: l,
-        };
         let per = nseg.div_ceil(GRID_PARTS).max(1);
         let mut parts: Vec<(Vec<u64>, Vec<u32>)> = (0..GRID_PARTS)
             .into_par_iter()
@@ -286,18 +298,7 @@ impl Band {
             }
             keep_grid(other);
         }
-        let dir = |k: usize| chords.dir(k);
-
         // Refine on the exact curve, row by row in parallel (raster order kept).
-        // The polyline is within its largest sagitta of the curve (about
-        // chord * turning angle / 8; bounded by a quarter for safety), so
-        // only pixels that near the band need the exact projection.
-        let mut sagitta: f64 = 0.0;
-        for k in 0..nseg {
-            let (t0, t1) = (dir(k), dir(k + 1));
-            let turn = (t0[0] * t1[1] - t0[1] * t1[0]).abs().asin();
-            sagitta = sagitta.max(step * turn / 4.0);
-        }
         let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
         let weight = thin_weight(thin);
         // Pixels that see both sides of a corner (see `curve/corners.rs`).

@@ -352,12 +352,15 @@ impl Correlation {
                 let w = band.weight[i];
                 let (f, gamma) = match pushed {
                     Some(values) => {
-                        let (gamma, _) = profile.eval(
-                            band.r[i] - u,
-                            half_width,
-                            band.normal[i],
-                            band.curvature[i],
-                        );
+                        // At U = 0 (a new reference's first iteration) the band
+                        // holds this value already: the same call.
+                        let gamma = if u == 0.0 {
+                            band.gamma[i]
+                        } else {
+                            profile
+                                .eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i])
+                                .0
+                        };
                         let wg = w * gamma;
                         for (k, v) in vals.iter().enumerate() {
                             acc.g_proj[basis.index(first, k)] += wg * band.dgamma[i] * v;

@@ -319,12 +319,20 @@ impl Correlation {
                     let mut scale = 1.0;
                     let (f, gamma) = match pushed {
                         Some(values) => {
-                            let (gamma, _) = profile.eval(
-                                band.r[i] - u,
-                                half_width,
-                                band.normal[i],
-                                band.curvature[i],
-                            );
+                            // At U = 0 (a new reference's first iteration) the band
+                            // holds this value already: the same call.
+                            let gamma = if u == 0.0 {
+                                band.gamma[i]
+                            } else {
+                                profile
+                                    .eval(
+                                        band.r[i] - u,
+                                        half_width,
+                                        band.normal[i],
+                                        band.curvature[i],
+                                    )
+                                    .0
+                            };
                             if let Some(t) = tilt {
                                 scale = 1.0 + t[i] * (band.r[i] - u);
                             }
