@@ -209,19 +209,25 @@ pub struct FrameOutput {
     pub problems: Vec<String>,
 }
 
-/// Measure frame `index` (`path`, results named `files.stem`).
+/// Decode frame `path` (the error as the one line the summary records).
+pub fn decode_frame(path: &Path) -> Result<Image, String> {
+    vicurve::io::load_image(path).map_err(|e| e.to_string())
+}
+
+/// Measure frame `index` (`path`, decoded by [`decode_frame`] into
+/// `decoded`; results named `files.stem`).
 pub fn measure_frame(
     job: &Job,
     fingerprint: &str,
     index: usize,
-    path: &Path,
+    (path, decoded): (&Path, Result<Image, String>),
     files: &FrameFiles,
     tracking: &Tracking,
 ) -> FrameOutput {
     let stem = files.stem.as_str();
-    let image = match vicurve::io::load_image(path) {
+    let image = match decoded {
         Ok(i) => i,
-        Err(e) => return unreadable(job, stem, &e.to_string()),
+        Err(e) => return unreadable(job, stem, &e),
     };
     let path_text = path.display().to_string();
     // One prepared image per interpolation, prepared when a fit first asks

@@ -16,7 +16,7 @@
 //! and written, the summary says which failed and why); nothing measured at
 //! all, or the job cannot run, exit 1.
 
-use crate::frame::{measure_frame, FrameFiles, Tracking};
+use crate::frame::{decode_frame, measure_frame, FrameFiles, Tracking};
 use crate::job::{frame_stem, Job};
 use crate::resume::{read_recorded, write_atomic, Manifest};
 use crate::summary::{first_cell, header, split_csv, COLUMNS};
@@ -110,6 +110,8 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
     let mut measured = 0;
     let mut last_write = Instant::now();
     let total = stems.len();
+    // The next frame, decoded ahead (its index and what decoding gave).
+    let mut prefetched: Option<(usize, Result<vicurve::Image, String>)> = None;
     for (i, (path, stem)) in job.images.iter().zip(&stems).enumerate() {
         let files = FrameFiles::new(job, stem);
         if done[i] {
@@ -123,7 +125,18 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
             bar.inc_length(1);
         }
         let started = Instant::now();
-        let out = measure_frame(job, &fingerprint, i, path, &files, &tracking);
+        let decoded = match prefetched.take() {
+            Some((k, d)) if k == i => d,
+            _ => decode_frame(path),
+        };
+        // The next frame to measure is decoded while this one is measured
+        // (a frame's fit leaves a core idle part of the time).
+        let next = (i + 1..total).find(|&k| !done[k]);
+        let (out, next_decoded) = rayon::join(
+            || measure_frame(job, &fingerprint, i, (path, decoded), &files, &tracking),
+            || next.map(|k| (k, decode_frame(&job.images[k]))),
+        );
+        prefetched = next_decoded;
         tracking.update(job, stem, &out.good, &out.states);
         lines[i] = out.rows.iter().map(|r| r.to_line()).collect();
         measured += 1;
