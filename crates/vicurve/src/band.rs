@@ -489,8 +489,9 @@ static GRIDS: Mutex<Vec<Vec<u64>>> = Mutex::new(Vec::new());
 
 /// Cells of a grid kept for the next band (128 MB); a larger one is freed.
 const MAX_KEPT_GRID: usize = 1 << 24;
-/// Grids kept at most.
-const MAX_KEPT_GRIDS: usize = 8;
+/// Grids kept at most: two per band being built, for two curves measured
+/// at once (at most 512 MB kept, for bands around curves 4000 px across).
+const MAX_KEPT_GRIDS: usize = 4;
 /// Parallel runs of the chords' rasterisation.
 const GRID_PARTS: usize = 2;
 
