@@ -581,8 +581,10 @@ impl Chords<'_> {
                 let o = self.dir(j);
                 (t[0] * o[1] - t[1] * o[0]).abs().asin()
             };
-            let prev = if k > 0 || self.closed {
+            let prev = if self.closed {
                 turn(k + nseg - 1)
+            } else if k > 0 {
+                turn(k - 1)
             } else {
                 0.0
             };

@@ -83,8 +83,14 @@ const MAX_REREFERENCES: usize = 100;
 /// whose settles then ran to `MAX_SETTLES` without contracting.
 const SETTLE_TOLERANCE: f64 = 0.02;
 /// A settle whose displacement is not under this fraction of the previous
-/// run's does not contract (noise, not shape, drives it): the stage stops.
+/// run's (with the same profile) does not contract: noise, not shape,
+/// drives it, and the stage stops. Only for displacements under
+/// `SETTLE_NOISE_CHECK` times `SETTLE_TOLERANCE`: larger ones are a shape
+/// the elements cannot follow (a corner without a break), which settles
+/// to `MAX_SETTLES` as before.
 const SETTLE_CONTRACTION: f64 = 0.5;
+/// See [`SETTLE_CONTRACTION`].
+const SETTLE_NOISE_CHECK: f64 = 5.0;
 /// Settling re-references of the last stage, at most.
 const MAX_SETTLES: usize = 4;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
@@ -463,15 +469,17 @@ fn run_schedule(
                     let followed =
                         config.kind == Kind::Silhouette && config.blur_correction && !matched_added;
                     let moved = lambda.iter().fold(0.0, |m: f64, l| m.max(l.abs()));
+                    let contracting = moved < SETTLE_CONTRACTION * previous_move
+                        || moved >= SETTLE_NOISE_CHECK * SETTLE_TOLERANCE;
                     let settle = auto
                         && is_last
                         && !followed
                         && o == Outcome::Converged
                         && settles < MAX_SETTLES
-                        && (settles == 0
-                            || (moved > SETTLE_TOLERANCE
-                                && moved < SETTLE_CONTRACTION * previous_move));
-                    previous_move = moved;
+                        && (settles == 0 || (moved > SETTLE_TOLERANCE && contracting));
+                    // A run with a new blur starts a new comparison: its
+                    // displacement came from the profile's change.
+                    previous_move = if again { f64::INFINITY } else { moved };
                     if again || settle {
                         let spacing = corr.basis.element_length().max(CURVE_SPACING);
                         current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;

@@ -39,6 +39,7 @@ use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::{Interpolation, Sampler};
+use crate::virtual_image::pixel_edge::MIN_BLUR;
 use crate::virtual_image::{Kind, Profile};
 use serde::{Deserialize, Serialize};
 
@@ -250,6 +251,11 @@ fn parabolic_refit(corr: &Correlation, lambda: &[f64], current: f64) -> Option<f
     let variance = parabola_vertex(blurs.map(|b| b * b), blurs.map(blur_residual(corr, lambda)))?;
     // A focused edge: the residual grows from variance 0 on.
     let blur = variance.max(0.0).sqrt();
+    // Below `MIN_BLUR` every blur gives the same profile, the residual is
+    // flat and its vertex meaningless: the blur in use stands.
+    if blur < MIN_BLUR && current < MIN_BLUR {
+        return Some(current);
+    }
     ((blur - mid).abs() <= BLUR_PROBE).then_some(blur)
 }
 

@@ -11,8 +11,11 @@
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Items per chunk: large enough that a chunk's partial result (a few
-/// kilobytes of normal-matrix blocks at most) costs little next to it.
+/// Items per chunk: large enough that a chunk's partial result (a copy of
+/// the system being assembled: a few kilobytes for a banded matrix, up to a
+/// few hundred for the varying levels' coupling block) costs little next
+/// to summing its items. All partial results are held until they are
+/// added, one per 2048 items.
 pub(crate) const CHUNK: usize = 2048;
 
 /// `map` applied to the consecutive ranges of `CHUNK` items of `0..len` in

@@ -29,8 +29,8 @@ use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 /// Smallest trapezoid width used, pixels (see the module docs).
 const MIN_WIDTH: f64 = 0.02;
-/// Smallest blur used, pixels.
-const MIN_BLUR: f64 = 0.03;
+/// Smallest blur used, pixels: a smaller one gives the same profile.
+pub(crate) const MIN_BLUR: f64 = 0.03;
 
 /// Standard normal distribution function (the reference for
 /// [`normal_cdf_pdf`]).
