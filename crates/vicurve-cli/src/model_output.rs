@@ -9,7 +9,7 @@ use crate::Failure;
 use serde::Serialize;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{FitConfig, Measurement, Outcome};
-use vicurve::model::bspline_curve::{measure_bspline_curve, BsplineCurveConfig, BsplineCurveFit};
+use vicurve::model::bspline_curve::{measure_bspline_curve, BsplineCurveConfig};
 use vicurve::model::{measure_model, ModelConfig, ModelFit, ModelProfile, ShapeModel};
 use vicurve::Image;
 
@@ -17,14 +17,78 @@ use vicurve::Image;
 /// is reported as a likely misfit.
 const MISFIT: f64 = 2.0;
 
-/// The result file of a measurement with a model: the B-spline record as
-/// `measure --out` writes it (its `samples` count those of the model), then
-/// `model`.
+/// The result file of a measurement with a model (a shape or the free
+/// B-spline curve): the B-spline record as `measure --out` writes it (its
+/// `samples` those of the model), then `model`.
 #[derive(Serialize)]
-struct WithModel<'a> {
+struct WithModel<'a, M> {
     #[serde(flatten)]
     result: ResultFile<'a>,
-    model: &'a ModelFit,
+    model: &'a M,
+}
+
+/// Write the outputs of a measurement `m` shown through a model's samples
+/// (`--points`, the overlays; `--out` with the `model` object), and print
+/// the measurement's summary when nothing is written. Returns the overlay
+/// and points writing's result, then the record's, for the caller to
+/// report after its own printing.
+#[allow(clippy::too_many_arguments)]
+fn write_with_model<M: Serialize>(
+    outputs: &Outputs,
+    path_text: &str,
+    image: &Image,
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+    samples: Vec<vicurve::fit::Sample>,
+    model: &M,
+) -> (Result<(), Failure>, Result<(), Failure>) {
+    let mut shown = m.clone();
+    shown.samples = samples;
+    let others = Outputs {
+        out: None,
+        points: outputs.points.clone(),
+        svg: outputs.svg.clone(),
+        png: outputs.png.clone(),
+        png_scale: outputs.png_scale,
+    };
+    let written = write_outputs(&others, path_text, image, init, config, &shown);
+    let json = match &outputs.out {
+        Some(p) => {
+            let size = (image.width(), image.height());
+            let record = WithModel {
+                result: ResultFile::new(path_text, size, init, config, &shown),
+                model,
+            };
+            write_json(p, &record).map_err(Failure::Error)
+        }
+        None => Ok(()),
+    };
+    let any = outputs.out.is_some()
+        || outputs.points.is_some()
+        || outputs.svg.is_some()
+        || outputs.png.is_some();
+    if !any {
+        print_summary(config, m);
+    }
+    (written, json)
+}
+
+/// The exit status of a model fit that ended as `outcome` (`what` names
+/// it): a warning at the iteration limit, an error (3) when it diverged.
+fn model_outcome(what: &str, outcome: Outcome) -> Result<(), Failure> {
+    match outcome {
+        Outcome::Converged => Ok(()),
+        Outcome::IterationLimit => {
+            eprintln!(
+                "vicurve: warning: the {what} fit reached its iteration limit before converging"
+            );
+            Ok(())
+        }
+        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
+            "the {what} fit diverged: {divergence}"
+        ))),
+    }
 }
 
 /// Fit `model` on the measurement `m`, write the outputs (`--points`, the
@@ -41,34 +105,9 @@ pub fn run(
     m: &Measurement,
 ) -> Result<(), Failure> {
     let fit = measure_model(image, m, config, model, &ModelConfig::default())?;
-    let mut shown = m.clone();
-    shown.samples = fit.samples(config.sample_spacing)?;
-    let others = Outputs {
-        out: None,
-        points: outputs.points.clone(),
-        svg: outputs.svg.clone(),
-        png: outputs.png.clone(),
-        png_scale: outputs.png_scale,
-    };
-    let written = write_outputs(&others, path_text, image, init, config, &shown);
-    let json = match &outputs.out {
-        Some(p) => {
-            let size = (image.width(), image.height());
-            let record = WithModel {
-                result: ResultFile::new(path_text, size, init, config, &shown),
-                model: &fit,
-            };
-            write_json(p, &record).map_err(Failure::Error)
-        }
-        None => Ok(()),
-    };
-    let any = outputs.out.is_some()
-        || outputs.points.is_some()
-        || outputs.svg.is_some()
-        || outputs.png.is_some();
-    if !any {
-        print_summary(config, m);
-    }
+    let samples = fit.samples(config.sample_spacing)?;
+    let (written, json) =
+        write_with_model(outputs, path_text, image, init, config, m, samples, &fit);
     print_model(&fit);
     // A shape that does not describe the edge leaves much more residual
     // than the free B-spline curve.
@@ -84,26 +123,7 @@ pub fn run(
     written?;
     json?;
     finish(m)?;
-    match fit.outcome {
-        Outcome::Converged => Ok(()),
-        Outcome::IterationLimit => {
-            eprintln!(
-                "vicurve: warning: the {model} fit reached its iteration limit before converging"
-            );
-            Ok(())
-        }
-        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
-            "the {model} fit diverged: {divergence}"
-        ))),
-    }
-}
-
-/// The record of `measure --model bspline-curve`: as [`WithModel`].
-#[derive(Serialize)]
-struct WithCurve<'a> {
-    #[serde(flatten)]
-    result: ResultFile<'a>,
-    model: &'a BsplineCurveFit,
+    model_outcome(&model.to_string(), fit.outcome)
 }
 
 /// `--model bspline-curve`: the free B-spline curve fitted on the
@@ -123,33 +143,9 @@ pub fn run_bspline_curve(
     let fit = measure_bspline_curve(image, m, config, &BsplineCurveConfig::default())?;
     let size = (image.width(), image.height());
     let cad_written = cad.write(&fit.curve, path_text, Some(size));
-    let mut shown = m.clone();
-    shown.samples = fit.samples(config.sample_spacing)?;
-    let others = Outputs {
-        out: None,
-        points: outputs.points.clone(),
-        svg: outputs.svg.clone(),
-        png: outputs.png.clone(),
-        png_scale: outputs.png_scale,
-    };
-    let written = write_outputs(&others, path_text, image, init, config, &shown);
-    let json = match &outputs.out {
-        Some(p) => {
-            let record = WithCurve {
-                result: ResultFile::new(path_text, size, init, config, &shown),
-                model: &fit,
-            };
-            write_json(p, &record).map_err(Failure::Error)
-        }
-        None => Ok(()),
-    };
-    let any = outputs.out.is_some()
-        || outputs.points.is_some()
-        || outputs.svg.is_some()
-        || outputs.png.is_some();
-    if !any {
-        print_summary(config, m);
-    }
+    let samples = fit.samples(config.sample_spacing)?;
+    let (written, json) =
+        write_with_model(outputs, path_text, image, init, config, m, samples, &fit);
     let sigmas: Vec<f64> = fit.control_points.iter().map(|p| p.sigma_n).collect();
     let max_sigma = sigmas.iter().copied().fold(0.0, f64::max);
     let rms_sigma = (sigmas.iter().map(|s| s * s).sum::<f64>() / sigmas.len().max(1) as f64).sqrt();
@@ -175,18 +171,7 @@ pub fn run_bspline_curve(
     json?;
     cad_written?;
     finish(m)?;
-    match fit.outcome {
-        Outcome::Converged => Ok(()),
-        Outcome::IterationLimit => {
-            eprintln!(
-                "vicurve: warning: the bspline-curve fit reached its iteration limit before converging"
-            );
-            Ok(())
-        }
-        Outcome::Diverged { divergence } => Err(Failure::Diverged(format!(
-            "the bspline-curve fit diverged: {divergence}"
-        ))),
-    }
+    model_outcome("bspline-curve", fit.outcome)
 }
 
 /// The model's parameters, one a line, then how it was fitted.

@@ -31,18 +31,28 @@ fn max_error(dir: &Path, points: &str, truth: &str) -> f64 {
     json(&stats)["max_abs"].as_f64().unwrap()
 }
 
+/// `vicurve synth PRESET` (blur 1) into `dir`: the image's and the truth's
+/// paths.
+fn synth(dir: &Path, preset: &str, size: &str, radius: &str) -> (String, String) {
+    let (img, truth) = (
+        p(dir, &format!("{preset}.png")),
+        p(dir, &format!("{preset}.json")),
+    );
+    let out = vicurve(&[
+        "synth", preset, "--size", size, "--radius", radius, "--blur", "1", "--out", &img,
+        "--truth", &truth,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    (img, truth)
+}
+
 /// A 20 px segment on a disc's edge grows into the closed disc; the JSON
 /// says how it grew. A closed start cannot grow.
 #[test]
 fn grow_from_a_segment() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (img, truth) = (p(d, "disc.png"), p(d, "disc.json"));
-    let out = vicurve(&[
-        "synth", "disc", "--size", "200x200", "--radius", "60", "--blur", "1", "--out", &img,
-        "--truth", &truth,
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (img, truth) = synth(d, "disc", "200x200", "60");
     // The disc's centre is (100.3, 99.8): its right edge is at x = 160.3.
     let (res, pts) = (p(d, "r.json"), p(d, "r.csv"));
     let out = vicurve(&[
@@ -98,12 +108,7 @@ fn grow_from_a_segment() {
 fn contour_from_a_picked_point() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (img, truth) = (p(d, "ring.png"), p(d, "ring.json"));
-    let out = vicurve(&[
-        "synth", "ring", "--size", "240x240", "--radius", "80", "--blur", "1", "--out", &img,
-        "--truth", &truth,
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (img, truth) = synth(d, "ring", "240x240", "80");
     // The ring's centre is (120.3, 119.8): its rightmost point is (200.3, 119.8).
     let (res, pts) = (p(d, "r.json"), p(d, "r.csv"));
     let out = vicurve(&[
