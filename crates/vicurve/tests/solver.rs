@@ -171,6 +171,53 @@ proptest! {
     }
 
     #[test]
+    fn inverse_band_matches_dense_inverse(
+        (n, p, c, off, margin, _b) in matrix_case(),
+        first in 0..100usize,
+        values in prop::collection::vec(-2.0..2.0f64, 1..8),
+    ) {
+        let (m, d) = build(n, p, c, &off, &margin);
+        let f = BandCholesky::factor(&m).unwrap();
+        let inv = DenseCholesky::factor(&d, n).unwrap().inverse();
+        let scale = max_abs(&inv).max(1e-300);
+        // The band asked for may be wider or narrower than the matrix's.
+        let q = values.len() - 1;
+        let w = 2 * q + 1;
+        let band = f.inverse_band(q, c);
+        prop_assert_eq!(band.len(), n * w);
+        for i in 0..n {
+            for k in 0..w {
+                let j = i as isize + k as isize - q as isize;
+                let expected = if c {
+                    inv[i * n + j.rem_euclid(n as isize) as usize]
+                } else if (0..n as isize).contains(&j) {
+                    inv[i * n + j as usize]
+                } else {
+                    0.0
+                };
+                prop_assert!((band[i * w + k] - expected).abs() <= 1e-10 * scale,
+                    "({}, {}): {} vs {}", i, j, band[i * w + k], expected);
+            }
+        }
+        // The quadratic form of consecutive values from the band, as
+        // `Correlation::position_sigma` takes it, is the substitution's.
+        if c || first + q < n {
+            let idx = |k: usize| (first + k) % n;
+            let mut got = 0.0;
+            for (k, vk) in values.iter().enumerate() {
+                for (l, vl) in values.iter().enumerate() {
+                    got += vk * vl * band[idx(k) * w + l + q - k];
+                }
+            }
+            let mut scratch = vec![0.0; n];
+            let expected = f.inverse_quadratic_form(first, &values, &mut scratch);
+            let norm: f64 = values.iter().map(|v| v * v).sum::<f64>() * scale;
+            prop_assert!((got - expected).abs() <= 1e-10 * norm * values.len() as f64,
+                "{} vs {}", got, expected);
+        }
+    }
+
+    #[test]
     fn negative_diagonal_is_reported((n, p, c, off, margin, _b) in matrix_case(), k in 0..60usize) {
         let k = k % n;
         let (mut m, mut d) = build(n, p, c, &off, &margin);

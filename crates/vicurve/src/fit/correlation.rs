@@ -57,6 +57,7 @@ use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Band pixels displaced out of the image that an iteration tolerates (or
 /// 2 % of the band if more): they are taken as fitting exactly.
@@ -142,6 +143,9 @@ pub(crate) struct Correlation {
     /// Gray levels that vary along the curve ([`LevelModel::Varying`]);
     /// `None`: the global pair.
     varying: Option<Box<varying::Varying>>,
+    /// The band of `M0^-1` ([`BandCholesky::inverse_band`]), made on the
+    /// first [`Self::position_sigma`].
+    inverse_band: OnceLock<Vec<f64>>,
 }
 
 impl Correlation {
@@ -260,6 +264,7 @@ impl Correlation {
             delta: vec![0.0; n],
             ssr: 0.0,
             noise_var: None,
+            inverse_band: OnceLock::new(),
         })
     }
 
@@ -714,9 +719,10 @@ impl Correlation {
     /// contrast at `s`) and `sigma^2` the noise variance per pixel (method,
     /// section 8): the pure-noise estimate when [`Self::estimate_noise`] has
     /// run, else the residual variance (an upper bound: it includes profile
-    /// mismatch). `scratch` has one entry per unknown. NaN before the first
-    /// iteration.
-    pub fn position_sigma(&self, s: f64, scratch: &mut [f64]) -> f64 {
+    /// mismatch). NaN before the first iteration. The first call makes the
+    /// band of `M0^-1` (one solve per unknown); each call then costs a few
+    /// dozen products.
+    pub fn position_sigma(&self, s: f64) -> f64 {
         let Some((_, c)) = self.levels_at(s) else {
             return f64::NAN;
         };
@@ -728,7 +734,18 @@ impl Correlation {
         let mut v = [0.0; crate::spline::MAX_DEGREE + 1];
         let first = self.basis.eval(s, &mut v);
         let vals = &v[..=self.basis.degree()];
-        let mut q = self.chol.inverse_quadratic_form(first, vals, scratch);
+        let p = self.basis.degree();
+        let w = 2 * p + 1;
+        let inverse = self
+            .inverse_band
+            .get_or_init(|| self.chol.inverse_band(p, self.basis.is_closed()));
+        let mut q = 0.0;
+        for (k, vk) in vals.iter().enumerate() {
+            let row = &inverse[self.basis.index(first, k) * w..][..w];
+            for (l, vl) in vals.iter().enumerate() {
+                q += vk * vl * row[l + p - k];
+            }
+        }
         match &self.varying {
             Some(var) => q += var.variance_term(&self.basis, first, vals),
             None => {

@@ -93,6 +93,15 @@ const SETTLE_CONTRACTION: f64 = 0.5;
 const SETTLE_NOISE_CHECK: f64 = 5.0;
 /// Settling re-references of the last stage, at most.
 const MAX_SETTLES: usize = 4;
+/// A run of the last stage that a settle is sure to follow (its first,
+/// see `settle` in [`measure_from`]) converges to this (pixels) instead of
+/// [`FitConfig::tolerance`]: it only places the settle's reference, and the
+/// settle's result moves by under a tenth of the reference's error (see
+/// [`SETTLE_TOLERANCE`]), so under 2e-4 px. Measured on the 41 frames of
+/// the `track_speed` example (a star, blur 1, noise 1 %; frame 0 with the
+/// default schedule, the others tracked): no output point moved by more
+/// than 1e-5 px, and a tracked frame takes one iteration fewer.
+const PRE_SETTLE_TOLERANCE: f64 = 2e-3;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -218,6 +227,16 @@ fn run_schedule(
             height,
         };
         let mut settles = 0;
+        // A silhouette's stage that a pixel-edge stage follows leaves the
+        // settling to it.
+        let followed = config.kind == Kind::Silhouette && config.blur_correction && !matched_added;
+        // Decided once per stage, on its first converged run (the runs
+        // after it re-reference the same image a fraction of a pixel
+        // away): whether varying levels are significant, whether the band
+        // holds clutter (`None`: not yet probed), and the image noise.
+        let mut levels_tested = false;
+        let mut cluttered: Option<bool> = None;
+        let mut stage_noise: Option<f64> = None;
         // The largest displacement of the run before this one, pixels.
         let mut previous_move = f64::INFINITY;
         let mut history = Vec::with_capacity(config.max_iterations.min(HISTORY_RESERVE));
@@ -318,8 +337,18 @@ fn run_schedule(
                     break 'stages;
                 }
             };
+            if corr.noise_var.is_none() {
+                corr.noise_var = stage_noise;
+            }
             let mut lambda = vec![0.0; corr.n_unknowns()];
             let budget = config.max_iterations.saturating_sub(iterations);
+            // A run that a settle is sure to follow only places its reference.
+            let pre_settle = auto && is_last && !followed && settles == 0;
+            let tolerance = if pre_settle {
+                config.tolerance.max(PRE_SETTLE_TOLERANCE)
+            } else {
+                config.tolerance
+            };
             let reref_limit = if rereferences >= MAX_REREFERENCES {
                 f64::INFINITY
             } else {
@@ -331,7 +360,7 @@ fn run_schedule(
                 sampler,
                 &config,
                 r,
-                budget,
+                (budget, tolerance),
                 reref_limit,
                 &mut step,
                 (&mut history, RunKind::Reference),
@@ -374,7 +403,9 @@ fn run_schedule(
                     // Varying levels that explain no more than noise would
                     // are dropped (they cost precision): this stage runs
                     // once more with the global pair, and so do the next.
-                    if o == Outcome::Converged
+                    let test_levels = o == Outcome::Converged && !levels_tested;
+                    levels_tested |= test_levels;
+                    if test_levels
                         && corr.varying_levels()
                         && !corr.levels_significant(&lambda, sampler)
                     {
@@ -391,7 +422,7 @@ fn run_schedule(
                                 sampler,
                                 &config,
                                 r,
-                                config.max_iterations,
+                                (config.max_iterations, tolerance),
                                 f64::INFINITY,
                                 &mut global_step,
                                 (&mut history, RunKind::GlobalLevels),
@@ -423,8 +454,8 @@ fn run_schedule(
                     if auto_elements {
                         fixed_elements = Some(corr.basis.n_elements());
                     }
-                    if o == Outcome::Converged {
-                        iterations += robust_refit(
+                    if o == Outcome::Converged && cluttered != Some(false) {
+                        let (used, found) = robust_refit(
                             &mut corr,
                             &mut lambda,
                             &mut step,
@@ -433,6 +464,14 @@ fn run_schedule(
                             r,
                             &mut history,
                         );
+                        iterations += used;
+                        cluttered = Some(found);
+                    }
+                    // The noise of a clean band serves the stage's next runs
+                    // (a cluttered one's estimate is made without the
+                    // rejected pixels, on each run's own weights).
+                    if cluttered == Some(false) && stage_noise.is_none() {
+                        stage_noise = corr.noise_var;
                     }
                     // The pixel edge's blur is fitted on the converged
                     // curve; a change means one more run with it.
@@ -466,8 +505,6 @@ fn run_schedule(
                     // U near 0. A silhouette's R = 2 px stage leaves this to
                     // the pixel-edge stage that follows it. "Vanishes":
                     // under `SETTLE_TOLERANCE`, or no longer contracting.
-                    let followed =
-                        config.kind == Kind::Silhouette && config.blur_correction && !matched_added;
                     let moved = lambda.iter().fold(0.0, |m: f64, l| m.max(l.abs()));
                     let contracting = moved < SETTLE_CONTRACTION * previous_move
                         || moved >= SETTLE_NOISE_CHECK * SETTLE_TOLERANCE;
@@ -490,8 +527,15 @@ fn run_schedule(
                     if let (None, Some(_)) = (corr.noise_var, step) {
                         corr.estimate_noise(&lambda, sampler);
                     }
-                    let spacing = reference_spacing(&corr.basis);
-                    let next = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
+                    // The next stage's reference, or the curve the edge's
+                    // spread is measured on after the last stage; the
+                    // tracking schedule's one stage needs neither.
+                    let next = if tracked.is_some() && is_last {
+                        None
+                    } else {
+                        let spacing = reference_spacing(&corr.basis);
+                        Some(displaced(&current, &corr.basis, &lambda, spacing, clip)?)
+                    };
                     reports.push(report(
                         stage,
                         profile,
@@ -507,7 +551,10 @@ fn run_schedule(
                     last = Some(Final {
                         half_width: r,
                         profile,
-                        reference: std::mem::replace(&mut current, next),
+                        reference: match next {
+                            Some(next) => std::mem::replace(&mut current, next),
+                            None => current.clone(),
+                        },
                         corr,
                         lambda,
                     });
@@ -627,8 +674,9 @@ enum Run {
     Failed(Divergence),
 }
 
-/// Iterate on one reference until convergence, the iteration `budget`, a
-/// displacement past `reref_limit` (pixels) or a failure. Returns how it
+/// Iterate on one reference until convergence (a step under `tolerance`,
+/// pixels), the iteration `budget`, a displacement past `reref_limit`
+/// (pixels) or a failure. Returns how it
 /// ended and the iterations used; `step` keeps the last successful step.
 #[allow(clippy::too_many_arguments)]
 fn iterate_to_end(
@@ -637,7 +685,7 @@ fn iterate_to_end(
     sampler: &Sampler,
     config: &FitConfig,
     r: f64,
-    budget: usize,
+    (budget, tolerance): (usize, f64),
     reref_limit: f64,
     step: &mut Option<correlation::Step>,
     (history, run): (&mut Vec<IterationRecord>, RunKind),
@@ -680,7 +728,7 @@ fn iterate_to_end(
         for (l, d) in lambda.iter_mut().zip(&corr.delta) {
             *l += scale * d;
         }
-        if s.max_step < config.tolerance {
+        if s.max_step < tolerance {
             return (Run::Converged, used);
         }
         if lambda.iter().any(|l| l.abs() > reref_limit) {
@@ -754,7 +802,7 @@ fn refine(
             sampler,
             config,
             r,
-            config.max_iterations,
+            (config.max_iterations, config.tolerance),
             f64::INFINITY,
             &mut fine_step,
             (&mut *history, RunKind::Refine),
@@ -764,15 +812,13 @@ fn refine(
             break;
         };
         fine.estimate_noise(&fine_lambda, sampler);
-        let mut scratch_c = vec![0.0; corr.n_unknowns()];
-        let mut scratch_f = vec![0.0; fine.n_unknowns()];
         let (mut diff2, mut noise2) = (0.0, 0.0);
         for &u in &params {
             let d =
                 displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
             diff2 += d * d;
-            let sf = fine.position_sigma(u, &mut scratch_f);
-            let sc = corr.position_sigma(u, &mut scratch_c);
+            let sf = fine.position_sigma(u);
+            let sc = corr.position_sigma(u);
             noise2 += sf * sf - sc * sc;
         }
         // Significant, and still converging like a shape error (a change
@@ -839,7 +885,8 @@ pub(crate) fn tukey_weight(v: f64, scale: f64) -> f64 {
 /// rounds (iteratively reweighted least squares). Rejected pixels no longer
 /// drag the curve; their share is reported per sample
 /// ([`Sample::weight`]). The matrix is re-assembled each round. Returns the
-/// iterations used; on any failure the fit before it stands.
+/// iterations used and whether the band holds clutter; on any failure the
+/// fit before it stands.
 fn robust_refit(
     corr: &mut Correlation,
     lambda: &mut Vec<f64>,
@@ -848,7 +895,7 @@ fn robust_refit(
     config: &FitConfig,
     r: f64,
     history: &mut Vec<IterationRecord>,
-) -> usize {
+) -> (usize, bool) {
     let base: Vec<f64> = corr
         .band
         .weight
@@ -857,6 +904,7 @@ fn robust_refit(
         .map(|(w, k)| if *k > 0.0 { w / k } else { *w })
         .collect();
     let mut used = 0;
+    let mut found = false;
     for _ in 0..ROBUST_ROUNDS {
         let Some(s) = *step else { break };
         // A pixel displaced out of the image counts as fitting exactly.
@@ -871,6 +919,7 @@ fn robust_refit(
         let Some(scale) = clutter_scale(&probe, s.c) else {
             break;
         };
+        found = true;
         let res: Vec<f64> = (0..corr.band.len()).into_par_iter().map(residual).collect();
         let robust: Vec<f64> = res.iter().map(|v| tukey_weight(*v, scale)).collect();
         let mut band = corr.band.clone();
@@ -890,7 +939,7 @@ fn robust_refit(
             sampler,
             config,
             r,
-            config.max_iterations,
+            (config.max_iterations, config.tolerance),
             f64::INFINITY,
             &mut next_step,
             (&mut *history, RunKind::Robust),
@@ -908,7 +957,7 @@ fn robust_refit(
             break;
         }
     }
-    used
+    (used, found)
 }
 
 /// `U(u)` of a displacement basis and coefficients.
@@ -1116,25 +1165,21 @@ impl Final {
         let kept: Vec<usize> = (0..pts.len())
             .filter(|&i| i % every == 0 || (!closed && i + 1 == pts.len()))
             .collect();
-        let n = self.corr.n_unknowns();
         let out: Vec<Sample> = kept
             .par_iter()
-            .map_init(
-                || vec![0.0; n],
-                |scratch, &i| {
-                    let q = pts[i];
-                    let f = curve.frame(s[i]);
-                    Sample {
-                        s: s[i],
-                        x: q[0],
-                        y: q[1],
-                        nx: f.normal[0],
-                        ny: f.normal[1],
-                        sigma: self.corr.position_sigma(params[i], scratch),
-                        weight: weight_at(params[i]),
-                    }
-                },
-            )
+            .map(|&i| {
+                let q = pts[i];
+                let f = curve.frame(s[i]);
+                Sample {
+                    s: s[i],
+                    x: q[0],
+                    y: q[1],
+                    nx: f.normal[0],
+                    ny: f.normal[1],
+                    sigma: self.corr.position_sigma(params[i]),
+                    weight: weight_at(params[i]),
+                }
+            })
             .collect();
         Ok((curve, fit_error, out, levels))
     }
