@@ -20,6 +20,17 @@ pub struct Projection {
     pub at_end: bool,
 }
 
+/// Newton's last step, pixels of parameter. After a step `h` under this the
+/// foot is exact to about `kappa h^2` (quadratic convergence: 1e-6 kappa px),
+/// which moves `r` by far less (`r` is stationary at the foot), and the
+/// frame there is the second-order Taylor expansion from the point before
+/// the step: its position is off by `|C'''| h^3 / 6` (2e-10 px for
+/// `|C'''|` up to 1), its tangent by `|C'''| h^2 / 2` (a rotation that
+/// changes `r` by its square) and its curvature by `|C'''| h` (1e-3
+/// `|C'''|` per px: 1e-8 for a radius of 300 px, which the pixel-edge
+/// profile's curvature term scales by half the edge's variance).
+const FINISH_STEP: f64 = 1e-3;
+
 impl SplineCurve {
     /// Closest point of the curve to `(x, y)` by Newton's method on
     /// `(X - C(u)) . C'(u) = 0`, started at `u0` (which must be near the
@@ -36,13 +47,15 @@ impl SplineCurve {
         let max_step = self.basis().element_length();
         let mut u = u0;
         let mut at_end = false;
-        // The derivatives at `evaluated_at`, reused for the frame when the
-        // last Newton step was negligible (saves an evaluation per pixel).
-        let mut evaluated_at = f64::NAN;
+        // The derivatives at the last point evaluated, and the step taken
+        // from there to `u`: the frame at `u` is their Taylor expansion
+        // once that step is under `FINISH_STEP` (saves an evaluation per
+        // pixel).
         let mut last = [[0.0; 2]; 3];
+        let mut taken = f64::INFINITY;
         for _ in 0..12 {
             last = self.derivatives(u);
-            evaluated_at = u;
+            taken = f64::INFINITY;
             let [p, d1, d2] = last;
             let dx = x - p[0];
             let dy = y - p[1];
@@ -68,12 +81,11 @@ impl SplineCurve {
                     break;
                 }
             }
+            // The move along the curve (a closed curve's wrap is no move;
+            // an open curve's end may cut the step short).
+            taken = if closed { step } else { next - u };
             u = next;
-            // Quadratic convergence: after a step under 1e-5 px the foot is
-            // exact to ~kappa 1e-10 px, and the frame kept from before the
-            // step is off by 1e-5 px along the tangent only, which changes r
-            // by ~kappa 1e-10 px.
-            if step.abs() < 1e-5 {
+            if taken.abs() < FINISH_STEP {
                 break;
             }
         }
@@ -84,8 +96,17 @@ impl SplineCurve {
             let speed = (d1[0] * d1[0] + d1[1] * d1[1]).sqrt();
             at_end = at_end || g.abs() > 1e-9 * speed.max(1.0);
         }
-        let f = if (u - evaluated_at).abs() < 1e-5 {
-            super::frame_from(last[0], last[1], last[2])
+        let f = if taken.abs() < FINISH_STEP {
+            let [p, d1, d2] = last;
+            let h = taken;
+            super::frame_from(
+                [
+                    p[0] + h * (d1[0] + 0.5 * h * d2[0]),
+                    p[1] + h * (d1[1] + 0.5 * h * d2[1]),
+                ],
+                [d1[0] + h * d2[0], d1[1] + h * d2[1]],
+                d2,
+            )
         } else {
             self.frame(u)
         };

@@ -47,6 +47,8 @@
 mod tilt;
 mod varying;
 
+pub(crate) use tilt::Measured as MeasuredTilt;
+
 use crate::band::Band;
 use crate::error::{Error, Result};
 use crate::fit::levels::{self, LevelModel};
@@ -270,17 +272,28 @@ impl Correlation {
 
     /// The system for `band`, comparing as its profile requires: the
     /// pixel-edge profile is pushed (module docs), the paper's profiles pull
-    /// the image back.
+    /// the image back. `tilt`: the light's tilt measured on an earlier
+    /// reference of the stage, taken instead of measuring it again when it
+    /// serves (see `tilt`).
     pub fn prepare(
         band: Band,
         basis: Basis,
         sampler: &Sampler,
         levels: LevelModel,
+        tilt: Option<&MeasuredTilt>,
     ) -> Result<Self> {
         match band.profile() {
-            Profile::PixelEdge { .. } => Correlation::new_pushed(band, basis, sampler, levels),
+            Profile::PixelEdge { .. } => {
+                Correlation::new_pushed(band, basis, sampler, levels, tilt)
+            }
             Profile::Paper { .. } => Correlation::new(band, basis, levels),
         }
+    }
+
+    /// The light's tilt this system measured or took (`None` without
+    /// varying levels or a pushed profile).
+    pub fn measured_tilt(&self) -> Option<&MeasuredTilt> {
+        self.varying.as_ref()?.measured_tilt.as_ref()
     }
 
     /// [`Correlation::new`] for the pushed profile (module docs): the
@@ -288,7 +301,13 @@ impl Correlation {
     ///
     /// Errors: those of `new`, and [`Error::BandOutsideImage`] when a band
     /// pixel has no value.
-    fn new_pushed(band: Band, basis: Basis, sampler: &Sampler, levels: LevelModel) -> Result<Self> {
+    fn new_pushed(
+        band: Band,
+        basis: Basis,
+        sampler: &Sampler,
+        levels: LevelModel,
+        known_tilt: Option<&MeasuredTilt>,
+    ) -> Result<Self> {
         // Band pixels are pixel centres: no interpolation.
         let read: Vec<Option<f64>> = band
             .pos
@@ -310,7 +329,15 @@ impl Correlation {
         if let (Some(var), Profile::PixelEdge { blur }) =
             (corr.varying.as_deref_mut(), corr.band.profile())
         {
-            var.tilt = tilt::estimate(&corr.band, sampler, &var.levels, blur);
+            let measured = match known_tilt {
+                Some(m) if m.serves(&var.levels, blur) => m.clone(),
+                _ => tilt::estimate(&corr.band, sampler, &var.levels, blur),
+            };
+            var.tilt = measured
+                .coefs
+                .as_deref()
+                .and_then(|c| tilt::at_pixels(&var.levels, c));
+            var.measured_tilt = Some(measured);
         }
         Ok(corr)
     }

@@ -94,14 +94,15 @@ const SETTLE_NOISE_CHECK: f64 = 5.0;
 /// Settling re-references of the last stage, at most.
 const MAX_SETTLES: usize = 4;
 /// A run of the last stage that a settle is sure to follow (its first,
-/// see `settle` in [`measure_from`]) converges to this (pixels) instead of
-/// [`FitConfig::tolerance`]: it only places the settle's reference, and the
-/// settle's result moves by under a tenth of the reference's error (see
-/// [`SETTLE_TOLERANCE`]), so under 2e-4 px. Measured on the 41 frames of
-/// the `track_speed` example (a star, blur 1, noise 1 %; frame 0 with the
-/// default schedule, the others tracked): no output point moved by more
-/// than 1e-5 px, and a tracked frame takes one iteration fewer.
-const PRE_SETTLE_TOLERANCE: f64 = 2e-3;
+/// see `settle` in [`measure_from`]) stops after a step under this (pixels)
+/// instead of [`FitConfig::tolerance`]: it only places the settle's
+/// reference, and the settle's result moves by a few percent of the
+/// reference's error, the error [`SETTLE_TOLERANCE`] accepts of the
+/// settles themselves. The step is applied, and Gauss–Newton converges
+/// fast here: the error left is about the next step's (1e-4 px after a
+/// 3e-3 px step on the `track_speed` example's star). Tracked frames take
+/// two iterations fewer.
+const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -237,6 +238,8 @@ fn run_schedule(
         let mut levels_tested = false;
         let mut cluttered: Option<bool> = None;
         let mut stage_noise: Option<f64> = None;
+        // The light's tilt, measured on the stage's first reference.
+        let mut tilt: Option<correlation::MeasuredTilt> = None;
         // The largest displacement of the run before this one, pixels.
         let mut previous_move = f64::INFINITY;
         let mut history = Vec::with_capacity(config.max_iterations.min(HISTORY_RESERVE));
@@ -311,7 +314,9 @@ fn run_schedule(
                 Err(e) => return Err(e),
             };
             let band_pixels = band.len();
-            let mut corr = match Correlation::prepare(band, basis.clone(), sampler, config.levels) {
+            let prepared =
+                Correlation::prepare(band, basis.clone(), sampler, config.levels, tilt.as_ref());
+            let mut corr = match prepared {
                 Ok(c) => c,
                 Err(e) if first_band => return Err(e),
                 Err(e) if appended => {
@@ -340,6 +345,7 @@ fn run_schedule(
             if corr.noise_var.is_none() {
                 corr.noise_var = stage_noise;
             }
+            tilt = corr.measured_tilt().cloned();
             let mut lambda = vec![0.0; corr.n_unknowns()];
             let budget = config.max_iterations.saturating_sub(iterations);
             // A run that a settle is sure to follow only places its reference.
@@ -354,6 +360,7 @@ fn run_schedule(
             } else {
                 config.rereference_fraction * r
             };
+            let before = history.len();
             let (end, used) = iterate_to_end(
                 &mut corr,
                 &mut lambda,
@@ -366,6 +373,17 @@ fn run_schedule(
                 (&mut history, RunKind::Reference),
             );
             iterations += used;
+            // Tracking: a step beyond the band's half-width means that the
+            // band does not see the edge (the start is too far from it, or
+            // the iteration went astray); the frame is for the full
+            // schedule, whose wide bands do, rather than for a chase that
+            // ends wherever the steps happen to land.
+            let lost = tracked.is_some() && history[before..].iter().any(|h| h.max_step > r);
+            let end = if lost {
+                Run::Failed(Divergence::NoContrast)
+            } else {
+                end
+            };
             let stage_end = match end {
                 Run::Rereference => None,
                 Run::Converged => Some(Outcome::Converged),
@@ -412,7 +430,7 @@ fn run_schedule(
                         config.levels = LevelModel::Global;
                         let band = corr.band.clone();
                         if let Ok(mut global) =
-                            Correlation::prepare(band, basis.clone(), sampler, config.levels)
+                            Correlation::prepare(band, basis.clone(), sampler, config.levels, None)
                         {
                             let mut global_lambda = lambda.clone();
                             let mut global_step = None;
@@ -791,7 +809,7 @@ fn refine(
         ) else {
             break;
         };
-        let Ok(mut fine) = Correlation::prepare(band, basis, sampler, config.levels) else {
+        let Ok(mut fine) = Correlation::prepare(band, basis, sampler, config.levels, None) else {
             break;
         };
         let mut fine_lambda = vec![0.0; fine.n_unknowns()];
@@ -926,7 +944,8 @@ fn robust_refit(
         for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
             *w = b * k;
         }
-        let Ok(mut next) = Correlation::prepare(band, corr.basis.clone(), sampler, config.levels)
+        let Ok(mut next) =
+            Correlation::prepare(band, corr.basis.clone(), sampler, config.levels, None)
         else {
             break;
         };

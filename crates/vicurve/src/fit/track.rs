@@ -132,8 +132,9 @@ impl TrackState {
 ///
 /// `Ok(None)` when the tracking schedule does not apply or could not
 /// measure the frame: `config` is not a silhouette's with the blur
-/// correction on, the stage's band does not fit in the image, or the stage
-/// did not converge. The frame then needs the full schedule
+/// correction on, the stage's band does not fit in the image, a step went
+/// beyond the band's half-width (the band does not see the edge: a start
+/// too far from it), or the stage did not converge. The frame then needs the full schedule
 /// ([`measure_from`]). Errors: an invalid configuration.
 ///
 /// The result's [`Measurement::edge_spread`] is `None` (the edge's spread
@@ -322,7 +323,8 @@ mod tests {
             let half_width = super::super::pixel_edge_band(blur);
             for levels in [LevelModel::Global, LevelModel::default()] {
                 let band = Band::build(&curve, &basis, half_width, profile, 200, 200).unwrap();
-                let corr = Correlation::prepare(band, basis.clone(), &sampler, levels).unwrap();
+                let corr =
+                    Correlation::prepare(band, basis.clone(), &sampler, levels, None).unwrap();
                 let lambda = vec![0.0; corr.n_unknowns()];
                 let ssr = blur_residual(&corr, &lambda);
                 let mut optimum = crate::psf::golden(0.0, 4.0, 60, &ssr);

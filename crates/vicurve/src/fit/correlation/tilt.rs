@@ -50,9 +50,59 @@ const CONSISTENCY: f64 = 0.5;
 /// A relative slope beyond this (1/px, 5 % per pixel) is not light.
 const MAX_TILT: f64 = 0.05;
 
-/// `tau` at every band pixel (module docs), or `None` when it cannot be
-/// measured. `blur` is the edge's blur (pixels).
-pub(crate) fn estimate(
+/// A tilt as [`estimate`] measured it, kept for the next references of a
+/// stage: the light does not change when the reference moves a fraction of
+/// a pixel, so they evaluate it ([`at_pixels`]) instead of measuring it
+/// again.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Measured {
+    /// The edge's blur the plateaus were placed with, pixels.
+    pub blur: f64,
+    /// `tau`'s coefficients in the levels' basis; `None`: no tilt.
+    pub coefs: Option<Vec<f64>>,
+}
+
+impl Measured {
+    /// Whether this measurement serves a band with the levels' basis
+    /// `levels` and the edge's `blur`: the same blur (a wider one places
+    /// the plateaus further out) and as many levels functions.
+    pub(crate) fn serves(&self, levels: &LevelBasis, blur: f64) -> bool {
+        self.blur == blur && self.coefs.as_ref().is_none_or(|c| c.len() == levels.m())
+    }
+}
+
+/// `tau`'s coefficients in the levels' basis (module docs), `None` when it
+/// cannot be measured. `blur` is the edge's blur (pixels).
+pub(crate) fn estimate(band: &Band, sampler: &Sampler, levels: &LevelBasis, blur: f64) -> Measured {
+    Measured {
+        blur,
+        coefs: coefficients(band, sampler, levels, blur),
+    }
+}
+
+/// `tau` at every band pixel of the levels' basis `levels` (its pixels are
+/// the band's), from its coefficients; `None` when it is not finite or
+/// beyond `MAX_TILT` somewhere (not light).
+pub(crate) fn at_pixels(levels: &LevelBasis, coefs: &[f64]) -> Option<Vec<f64>> {
+    let width = levels.width();
+    let tilt: Vec<f64> = (0..levels.first.len())
+        .into_par_iter()
+        .map(|i| {
+            let first = levels.first[i] as usize;
+            let vals = &levels.vals[i * width..(i + 1) * width];
+            vals.iter()
+                .enumerate()
+                .map(|(k, v)| coefs[levels.basis.index(first, k)] * v)
+                .sum()
+        })
+        .collect();
+    tilt.iter()
+        .all(|t: &f64| t.is_finite() && t.abs() <= MAX_TILT)
+        .then_some(tilt)
+}
+
+/// The coefficients of [`estimate`].
+fn coefficients(
     band: &Band,
     sampler: &Sampler,
     levels: &LevelBasis,
@@ -124,16 +174,8 @@ pub(crate) fn estimate(
     }
     // (NaN sums give no tilt.)
     let consistent = diff <= CONSISTENCY * CONSISTENCY * both;
-    if !consistent {
-        return None;
-    }
-    let tilt: Vec<f64> = (0..band.len())
-        .into_par_iter()
-        .map(|i| at(&rhs[0], i))
-        .collect();
-    tilt.iter()
-        .all(|t: &f64| t.is_finite() && t.abs() <= MAX_TILT)
-        .then_some(tilt)
+    let [coefs, _, _] = rhs;
+    consistent.then_some(coefs)
 }
 
 /// The three relative tilts `[both sides, outer side, inner side]`

@@ -68,6 +68,8 @@ pub(crate) struct Varying {
     /// Per band pixel, pushed profile: the light's relative slope across
     /// the curve, held fixed (see `tilt`); `None` without one.
     pub tilt: Option<Vec<f64>>,
+    /// The measurement behind `tilt` (`None`: not measured).
+    pub measured_tilt: Option<super::tilt::Measured>,
     /// Per band pixel: the tilt's factor `1 + tau r` of the current
     /// iteration (1 without tilt).
     sbuf: Vec<f64>,
@@ -187,6 +189,7 @@ impl Varying {
             fbuf: vec![0.0; band.len()],
             gbuf: vec![0.0; band.len()],
             tilt: None,
+            measured_tilt: None,
             sbuf: vec![1.0; band.len()],
             per,
             chunks: vec![chunk; count],
