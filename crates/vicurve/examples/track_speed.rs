@@ -21,7 +21,10 @@
 //! preparation (the cubic prefilter, or the plain copy of the tracking
 //! schedule), the fit; frames per second with and without the decode, and
 //! the largest distance to the exact star over all samples of all frames.
-//! `TRACK_SPEED_VERBOSE=1` prints every frame's stages.
+//! `TRACK_SPEED_VERBOSE=1` prints every frame's stages and its errors
+//! against the exact star (bias, RMS, largest);
+//! `TRACK_SPEED_BLUR=0.5` and `TRACK_SPEED_BITS=16` render the frames with
+//! another blur (pixels) or bit depth (into their own folder).
 
 use std::time::Instant;
 use vicurve::curve::{InitialCurve, SplineCurve};
@@ -62,7 +65,19 @@ fn main() {
         .map(|s| s.to_string())
         .collect()
     };
-    let dir = std::env::temp_dir().join("vicurve-track-speed");
+    let env = |name: &str| std::env::var(name).ok();
+    let blur: f64 = env("TRACK_SPEED_BLUR")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1.0);
+    let bits: u8 = env("TRACK_SPEED_BITS")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(8);
+    // The default frames keep their folder (and `vicurve track`'s command
+    // in docs/benchmarks.md); others get their own.
+    let dir = match (blur, bits) {
+        (1.0, 8) => std::env::temp_dir().join("vicurve-track-speed"),
+        _ => std::env::temp_dir().join(format!("vicurve-track-speed-{blur}-{bits}")),
+    };
     std::fs::create_dir_all(&dir).unwrap();
     let path = |k: usize| dir.join(format!("frame_{k:04}.png"));
     let t = Instant::now();
@@ -78,14 +93,14 @@ fn main() {
             method: Method::Coverage,
             foreground: 0.8,
             background: 0.2,
-            blur_sigma: 1.0,
+            blur_sigma: blur,
             noise: 0.01,
             seed: k as u64 + 1,
-            bits: Some(8),
+            bits: Some(bits),
             ..RenderSpec::default()
         };
         let img = render(&spec).unwrap();
-        vicurve::io::save_image(&path(k), &img, 8).unwrap();
+        vicurve::io::save_image(&path(k), &img, bits).unwrap();
     }
     println!(
         "{} frames of 1000x1000 in {} (made in {:.1} s), perimeter {:.0} px; {} threads",
@@ -186,8 +201,10 @@ fn main() {
                     })
                     .collect();
                 println!(
-                    "  {sched} frame {k}: max error {:.4} px; {}",
+                    "  {sched} frame {k}: max error {:.4} px bias {:+.5} rms {:.5}; {}",
                     e.max_abs,
+                    e.bias,
+                    e.rms,
                     stages.join("; ")
                 );
             }

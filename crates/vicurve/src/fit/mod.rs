@@ -103,6 +103,12 @@ const MAX_SETTLES: usize = 4;
 /// 3e-3 px step on the `track_speed` example's star). Tracked frames take
 /// two iterations fewer.
 const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
+/// A run on one reference that has not converged after this many
+/// iterations goes on with the reference's profile derivative in its
+/// gradient (`Correlation::use_reference_gradient`): the displaced one's
+/// may keep a model that does not fit the image from contracting. Runs
+/// that converge take 2 to 6.
+const DISPLACED_GRADIENT_ITERATIONS: usize = 12;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -714,6 +720,10 @@ fn iterate_to_end(
     loop {
         if used >= budget {
             return (Run::IterationLimit, used);
+        }
+        if used == DISPLACED_GRADIENT_ITERATIONS && corr.displaced_gradient() {
+            corr.use_reference_gradient();
+            relax = Relaxation::new(lambda.len());
         }
         let s = match corr.iterate(lambda, sampler, config.polarity) {
             Ok(s) => s,

@@ -62,9 +62,11 @@ pub(crate) struct Varying {
     /// Residual sum of squares of the best global pair at the last
     /// iteration's displacement.
     pub ssr_global: f64,
-    /// Per band pixel: `f` and `gamma` of the current iteration.
+    /// Per band pixel: `f`, `gamma` and its derivative `dg` of the
+    /// current iteration.
     fbuf: Vec<f64>,
     gbuf: Vec<f64>,
+    dbuf: Vec<f64>,
     /// Per band pixel, pushed profile: the light's relative slope across
     /// the curve, held fixed (see `tilt`); `None` without one.
     pub tilt: Option<Vec<f64>>,
@@ -188,6 +190,7 @@ impl Varying {
             dden,
             fbuf: vec![0.0; band.len()],
             gbuf: vec![0.0; band.len()],
+            dbuf: band.dgamma.clone(),
             tilt: None,
             measured_tilt: None,
             sbuf: vec![1.0; band.len()],
@@ -295,9 +298,10 @@ impl Correlation {
             .par_iter_mut()
             .zip(var.fbuf.par_chunks_mut(per))
             .zip(var.gbuf.par_chunks_mut(per))
+            .zip(var.dbuf.par_chunks_mut(per))
             .zip(var.sbuf.par_chunks_mut(per))
             .enumerate()
-            .for_each(|(k, (((acc, fb), gb), sb))| {
+            .for_each(|(k, ((((acc, fb), gb), db), sb))| {
                 acc.rhs_t.fill(0.0);
                 if pushed.is_some() {
                     acc.mat_t.fill(0.0);
@@ -306,9 +310,10 @@ impl Correlation {
                 acc.outside = None;
                 acc.outside_count = 0;
                 let start = k * per;
-                for (j, ((fo, go), so)) in fb
+                for (j, (((fo, go), dgo), so)) in fb
                     .iter_mut()
                     .zip(gb.iter_mut())
+                    .zip(db.iter_mut())
                     .zip(sb.iter_mut())
                     .enumerate()
                 {
@@ -323,18 +328,19 @@ impl Correlation {
                     let (f, gamma) = match pushed {
                         Some(values) => {
                             // At U = 0 (a new reference's first iteration) the band
-                            // holds this value already: the same call.
+                            // holds these values already: the same call.
                             let gamma = if u == 0.0 {
+                                *dgo = band.dgamma[i];
                                 band.gamma[i]
                             } else {
-                                profile
-                                    .eval(
-                                        band.r[i] - u,
-                                        half_width,
-                                        band.normal[i],
-                                        band.curvature[i],
-                                    )
-                                    .0
+                                let (gamma, dg) = profile.eval(
+                                    band.r[i] - u,
+                                    half_width,
+                                    band.normal[i],
+                                    band.curvature[i],
+                                );
+                                *dgo = dg;
+                                gamma
                             };
                             if let Some(t) = tilt {
                                 scale = 1.0 + t[i] * (band.r[i] - u);
@@ -453,6 +459,13 @@ impl Correlation {
         let lb = &var.levels;
         let theta = &var.theta;
         let (fbuf, gbuf, sbuf) = (&var.fbuf, &var.gbuf, &var.sbuf);
+        // The right-hand side takes the profile's derivative where the
+        // profile is (pushed: at `r - U`); the contrast's average `D` stays
+        // that of the reference's (it only scales the step).
+        let dnow = match (pushed, self.displaced_gradient) {
+            (Some(_), true) => &var.dbuf[..],
+            _ => &band.dgamma[..],
+        };
         var.chunks.par_iter_mut().enumerate().for_each(|(k, acc)| {
             acc.rhs_l.fill(0.0);
             acc.dnum.fill(0.0);
@@ -466,7 +479,7 @@ impl Correlation {
                 let w = band.weight[i];
                 let dg = band.dgamma[i];
                 let r = (a + c * gbuf[i]) * sbuf[i] - fbuf[i];
-                let x = w * c * r * dg;
+                let x = w * c * r * dnow[i];
                 let y = w * dg * dg * c;
                 for (k, v) in vals.iter().enumerate() {
                     let j = basis.index(first, k);
