@@ -44,7 +44,7 @@
 //! least-squares optimum of the displaced profile. (With the derivative
 //! at `r`, as the pulled image has it, the fixed point was an optimum
 //! weighted by the reference's profile: a tracked frame's settle then moved
-//! the curve by 3 % of the frame's motion at a blur of 1 px, by 15 to 40 %
+//! the curve by 3 % of the frame's motion at a blur of 1 px, by 14 to 35 %
 //! at 0.5 px, and needed two or three settles; now 0.1 to 1 % and 2 to
 //! 4 %, one settle.) `B`, `K` and the factor stay those of `U = 0`: they
 //! set the step's size, not where the iteration stops.
