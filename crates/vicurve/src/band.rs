@@ -453,6 +453,24 @@ impl Band {
         self.profile
     }
 
+    /// `(gamma, d gamma / d r)` of the band's profile at pixel `i` for the
+    /// curve displaced by `u` pixels along its normal: at `r - u`, with the
+    /// pixel's normal and curvature (the pushed profile, see
+    /// `fit::correlation`). At `u = 0` the values the band holds (the same
+    /// call, made once when the band was built).
+    #[inline]
+    pub fn profile_at(&self, i: usize, u: f64) -> (f64, f64) {
+        if u == 0.0 {
+            return (self.gamma[i], self.dgamma[i]);
+        }
+        self.profile.eval(
+            self.r[i] - u,
+            self.half_width,
+            self.normal[i],
+            self.curvature[i],
+        )
+    }
+
     /// Degree of the displacement basis.
     pub fn degree(&self) -> usize {
         self.degree

@@ -401,7 +401,6 @@ impl Correlation {
         let pushed = self.pushed.as_deref();
         let levels = self.levels;
         let displaced_gradient = self.displaced_gradient;
-        let (half_width, profile) = (band.half_width(), band.profile());
         self.acc.par_iter_mut().for_each(|acc| {
             acc.f_proj.iter_mut().for_each(|v| *v = 0.0);
             acc.g_proj.iter_mut().for_each(|v| *v = 0.0);
@@ -424,22 +423,10 @@ impl Correlation {
                 let mut dg = band.dgamma[i];
                 let (f, gamma) = match pushed {
                     Some(values) => {
-                        // At U = 0 (a new reference's first iteration) the band
-                        // holds these values already: the same call.
-                        let gamma = if u == 0.0 {
-                            band.gamma[i]
-                        } else {
-                            let (gamma, d) = profile.eval(
-                                band.r[i] - u,
-                                half_width,
-                                band.normal[i],
-                                band.curvature[i],
-                            );
-                            if displaced_gradient {
-                                dg = d;
-                            }
-                            gamma
-                        };
+                        let (gamma, d) = band.profile_at(i, u);
+                        if displaced_gradient {
+                            dg = d;
+                        }
                         let (wg, wd) = (w * gamma * dg, w * dg);
                         for (k, v) in vals.iter().enumerate() {
                             let j = basis.index(first, k);
@@ -749,12 +736,7 @@ impl Correlation {
         let u = self.displacement_at(i, lambda);
         let (f, gamma) = match &self.pushed {
             Some(values) => {
-                let (gamma, _) = band.profile().eval(
-                    band.r[i] - u,
-                    band.half_width(),
-                    band.normal[i],
-                    band.curvature[i],
-                );
+                let (gamma, _) = band.profile_at(i, u);
                 let k = self.tilt_factor(i, u);
                 return Some((a + c * gamma) * k - values[i]);
             }

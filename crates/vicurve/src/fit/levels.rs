@@ -204,6 +204,19 @@ impl LevelBasis {
         (v[0], v[1])
     }
 
+    /// One function of the levels' basis, with the `m` coefficients
+    /// `coefs`, at band pixel `i` (the light's tilt, say).
+    #[inline]
+    pub fn value(&self, i: usize, coefs: &[f64]) -> f64 {
+        let w = self.width();
+        let first = self.first[i] as usize;
+        self.vals[i * w..(i + 1) * w]
+            .iter()
+            .enumerate()
+            .map(|(k, v)| coefs[self.basis.index(first, k)] * v)
+            .sum()
+    }
+
     /// The features' functions at basis values `vals` from `first`.
     #[inline]
     fn coefs(&self, first: usize, vals: &[f64], theta: &[f64]) -> [f64; FEATURES] {

@@ -84,17 +84,9 @@ pub(crate) fn estimate(band: &Band, sampler: &Sampler, levels: &LevelBasis, blur
 /// the band's), from its coefficients; `None` when it is not finite or
 /// beyond `MAX_TILT` somewhere (not light).
 pub(crate) fn at_pixels(levels: &LevelBasis, coefs: &[f64]) -> Option<Vec<f64>> {
-    let width = levels.width();
     let tilt: Vec<f64> = (0..levels.first.len())
         .into_par_iter()
-        .map(|i| {
-            let first = levels.first[i] as usize;
-            let vals = &levels.vals[i * width..(i + 1) * width];
-            vals.iter()
-                .enumerate()
-                .map(|(k, v)| coefs[levels.basis.index(first, k)] * v)
-                .sum()
-        })
+        .map(|i| levels.value(i, coefs))
         .collect();
     tilt.iter()
         .all(|t: &f64| t.is_finite() && t.abs() <= MAX_TILT)
@@ -155,14 +147,7 @@ fn coefficients(
     }
     let factor = DenseCholesky::factor(&mat, m).ok()?;
     rhs.iter_mut().for_each(|r| factor.solve_in_place(r));
-    let at = |coefs: &[f64], i: usize| -> f64 {
-        let first = levels.first[i] as usize;
-        let vals = &levels.vals[i * width..(i + 1) * width];
-        vals.iter()
-            .enumerate()
-            .map(|(k, v)| coefs[levels.basis.index(first, k)] * v)
-            .sum()
-    };
+    let at = |coefs: &[f64], i: usize| levels.value(i, coefs);
     // Light tilts both sides alike (relatively): a difference as large as
     // half the tilt is something else (a plateau that is not flat, a level
     // at a quantisation step's middle), and then there is no tilt.

@@ -286,7 +286,6 @@ impl Correlation {
         let basis = &self.basis;
         let p = basis.degree();
         let pushed = self.pushed.as_deref();
-        let (half_width, profile) = (band.half_width(), band.profile());
         let lb = &var.levels;
         let theta = &var.theta;
         let have_theta = var.have_theta;
@@ -327,21 +326,8 @@ impl Correlation {
                     let mut scale = 1.0;
                     let (f, gamma) = match pushed {
                         Some(values) => {
-                            // At U = 0 (a new reference's first iteration) the band
-                            // holds these values already: the same call.
-                            let gamma = if u == 0.0 {
-                                *dgo = band.dgamma[i];
-                                band.gamma[i]
-                            } else {
-                                let (gamma, dg) = profile.eval(
-                                    band.r[i] - u,
-                                    half_width,
-                                    band.normal[i],
-                                    band.curvature[i],
-                                );
-                                *dgo = dg;
-                                gamma
-                            };
+                            let (gamma, dg) = band.profile_at(i, u);
+                            *dgo = dg;
                             if let Some(t) = tilt {
                                 scale = 1.0 + t[i] * (band.r[i] - u);
                             }
