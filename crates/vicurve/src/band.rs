@@ -29,6 +29,18 @@
 //! curve (chords about `R / 2` long) gives each pixel a starting parameter,
 //! then Newton's method on the exact curve refines it ([`SplineCurve::project`]).
 //!
+//! # Margin and window
+//! A band built with a margin ([`Band::build_windowed`]) holds the pixels
+//! within `R + margin` of the reference, but only those within `R` of the
+//! curve displaced by the current `U` count ([`Band::recentre`]): their
+//! weights are the band's [`weights`](Band::full_weights), the others' 0.
+//! The pixels that count are then those around the displaced curve,
+//! whatever the reference, as long as `|U|` stays within the margin: the
+//! result no longer depends on the reference through the band's edges
+//! (where the physical profile differs from the virtual one, a band
+//! centred on the reference and not on the edge tips the balance of the
+//! residuals by a fraction of `U`).
+//!
 //! # Levelset coordinates
 //! With [`Coords::Levelset`] (the paper's way, method section 7) the pixels
 //! get `s` and `r` by bilinear interpolation of the nodal values of a
@@ -51,11 +63,18 @@ use std::sync::Mutex;
 /// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
 /// out: too close to (or beyond) the centre of curvature.
 const MIN_JACOBIAN: f64 = 0.1;
+/// Pixels per parallel task of [`Band::recentre`].
+const RECENTRE_CHUNK: usize = 4096;
 
 /// The band pixels and their precomputed data; see the [module docs](self).
 #[derive(Clone, Debug)]
 pub struct Band {
     half_width: f64,
+    /// Pixels out to `half_width + margin` are kept; see the module docs.
+    margin: f64,
+    /// Pixels within `half_width` of the displaced curve at the last
+    /// [`Band::recentre`] (all of them without a margin).
+    inside: usize,
     profile: Profile,
     degree: usize,
     pub(crate) pos: Vec<[f64; 2]>,
@@ -69,8 +88,11 @@ pub struct Band {
     pub(crate) gamma: Vec<f64>,
     /// `gamma'(r / R) / R`, the derivative of the profile with respect to `r`.
     pub(crate) dgamma: Vec<f64>,
-    /// `1 / (1 - kappa r)`, see the module docs.
+    /// The weight each pixel counts with: [`Band::full_weights`], or 0 out
+    /// of the window (module docs).
     pub(crate) weight: Vec<f64>,
+    /// `1 / (1 - kappa r)` (see the module docs), times any robust factor.
+    pub(crate) full_weight: Vec<f64>,
     /// Signed curvature of the curve at the pixel's closest point, 1/px.
     pub(crate) curvature: Vec<f64>,
 }
@@ -121,6 +143,41 @@ impl Band {
         )
     }
 
+    /// [`Band::build`] with a margin (see the [module docs](self)): the
+    /// pixels out to `half_width + margin` (pixels) are kept, those within
+    /// `half_width` of the reference count until the first
+    /// [`Band::recentre`]. `coords` as in [`Band::build_with`].
+    ///
+    /// Errors: those of [`Band::build_with`] for a half-width of
+    /// `half_width + margin`, and [`Error::InvalidParameter`] for a negative
+    /// or non-finite margin.
+    #[allow(clippy::too_many_arguments)]
+    pub fn build_windowed(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        margin: f64,
+        profile: impl Into<Profile>,
+        width: usize,
+        height: usize,
+        coords: Coords,
+    ) -> Result<Band> {
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(Error::invalid(
+                "band margin",
+                format!("{margin} px (must be 0 or more)"),
+            ));
+        }
+        let mut band = Band::build_inner(
+            curve, basis, half_width, margin, profile, width, height, 1, coords,
+        )?;
+        if margin > 0.0 {
+            let zero = vec![0.0; basis.n_functions()];
+            band.recentre(basis, &zero);
+        }
+        Ok(band)
+    }
+
     /// [`Band::build`], keeping one pixel in `thin` (each with `thin` times
     /// the weight): 1 keeps all, 2 a checkerboard, 4 every other pixel of
     /// every other row (any other value is taken as the nearest of these
@@ -144,6 +201,25 @@ impl Band {
         thin: usize,
         coords: Coords,
     ) -> Result<Band> {
+        Band::build_inner(
+            curve, basis, half_width, 0.0, profile, width, height, thin, coords,
+        )
+    }
+
+    /// [`Band::build_with`] out to `half_width + margin` (pixels), the
+    /// profile taken with `half_width`.
+    #[allow(clippy::too_many_arguments)]
+    fn build_inner(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        margin: f64,
+        profile: impl Into<Profile>,
+        width: usize,
+        height: usize,
+        thin: usize,
+        coords: Coords,
+    ) -> Result<Band> {
         let profile = profile.into();
         if !(half_width.is_finite() && half_width >= 0.5) {
             return Err(Error::invalid(
@@ -159,16 +235,18 @@ impl Band {
                 "its length or closure differs from the reference curve's",
             ));
         }
-        check_inside(curve, half_width, width, height)?;
+        let reach = half_width + margin;
+        check_inside(curve, reach, width, height)?;
+        let cut = Cut {
+            half_width,
+            reach,
+            thin,
+        };
         let rows = match coords {
-            Coords::Exact => {
-                Band::exact_rows(curve, basis, half_width, profile, width, height, thin)
-            }
+            Coords::Exact => Band::exact_rows(curve, basis, cut, profile, width, height),
             Coords::Levelset { mesh_size } => {
-                let levelsets = LevelsetCoords::build(curve, half_width, mesh_size, width, height)?;
-                Band::levelset_rows(
-                    &levelsets, curve, basis, half_width, profile, width, height, thin,
-                )
+                let levelsets = LevelsetCoords::build(curve, reach, mesh_size, width, height)?;
+                Band::levelset_rows(&levelsets, curve, basis, cut, profile, width, height)
             }
         };
 
@@ -176,6 +254,8 @@ impl Band {
         let p = basis.degree();
         let mut band = Band {
             half_width,
+            margin,
+            inside: total,
             profile,
             degree: p,
             pos: Vec::with_capacity(total),
@@ -187,6 +267,7 @@ impl Band {
             gamma: Vec::with_capacity(total),
             dgamma: Vec::with_capacity(total),
             weight: Vec::with_capacity(total),
+            full_weight: Vec::new(),
             curvature: Vec::with_capacity(total),
         };
         for c in rows.into_iter().flatten() {
@@ -201,6 +282,7 @@ impl Band {
             band.weight.push(c.weight);
             band.curvature.push(c.curvature);
         }
+        band.full_weight.clone_from(&band.weight);
         Ok(band)
     }
 
@@ -208,16 +290,20 @@ impl Band {
     fn exact_rows(
         curve: &SplineCurve,
         basis: &Basis,
-        half_width: f64,
+        cut: Cut,
         profile: Profile,
         width: usize,
         height: usize,
-        thin: usize,
     ) -> Vec<Vec<Candidate>> {
+        let Cut {
+            half_width,
+            reach: band_reach,
+            thin,
+        } = cut;
         let l = curve.param_length();
         // Polyline of the curve: chords short enough that the closest chord
         // leads Newton to the global closest point.
-        let step = (0.5 * half_width).clamp(0.5, 4.0);
+        let step = (0.5 * band_reach).clamp(0.5, 4.0);
         let count = ((l / step).ceil() as usize).max(4);
         let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
         let verts: Vec<[f64; 2]> = params.iter().map(|&u| curve.point(u)).collect();
@@ -236,7 +322,7 @@ impl Band {
         };
         // The polyline is within its largest sagitta of the curve (about
         // chord * turning angle / 8; bounded by a quarter for safety): a
-        // pixel within `half_width` of the curve is within `half_width +
+        // pixel within `band_reach` of the curve is within `band_reach +
         // sagitta` of its nearest chord, which the grid below reaches with
         // a pixel to spare; only such pixels need the exact projection.
         let turns = if curve.is_closed() { nseg } else { nseg - 1 };
@@ -246,7 +332,7 @@ impl Band {
                 step * (t0[0] * t1[1] - t0[1] * t1[0]).abs().asin() / 4.0
             })
             .fold(0.0, f64::max);
-        let reach = half_width + sagitta + 1.0;
+        let reach = band_reach + sagitta + 1.0;
         // The control polygon's box contains the curve and its polyline.
         let bb = curve.bounding_box();
         let gx0 = ((bb[0] - reach).floor().max(0.0)) as usize;
@@ -299,7 +385,7 @@ impl Band {
             keep_grid(other);
         }
         // Refine on the exact curve, row by row in parallel (raster order kept).
-        let cutoff2 = (half_width + sagitta + 1e-6).powi(2);
+        let cutoff2 = (band_reach + sagitta + 1e-6).powi(2);
         let weight = thin_weight(thin);
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let clearances = curve.corner_clearances();
@@ -323,7 +409,7 @@ impl Band {
                     let y = (gy0 + j) as f64;
                     let pr = curve.project(x, y, f64::from(u0));
                     let jacobian = 1.0 - pr.curvature * pr.r;
-                    if pr.at_end || pr.r.abs() >= half_width || jacobian <= MIN_JACOBIAN {
+                    if pr.at_end || pr.r.abs() >= band_reach || jacobian <= MIN_JACOBIAN {
                         continue;
                     }
                     if clearances
@@ -361,17 +447,20 @@ impl Band {
     /// The band pixels with levelset coordinates, row by row (raster
     /// order): the pixels of the meshed domain whose interpolated `(s, r)`
     /// are in the band (see the module docs).
-    #[allow(clippy::too_many_arguments)]
     fn levelset_rows(
         levelsets: &LevelsetCoords,
         curve: &SplineCurve,
         basis: &Basis,
-        half_width: f64,
+        cut: Cut,
         profile: Profile,
         width: usize,
         height: usize,
-        thin: usize,
     ) -> Vec<Vec<Candidate>> {
+        let Cut {
+            half_width,
+            reach,
+            thin,
+        } = cut;
         let l = curve.param_length();
         let closed = curve.is_closed();
         let weight = thin_weight(thin);
@@ -404,7 +493,7 @@ impl Band {
                     let Some((s, r)) = levelsets.eval(xf, yf) else {
                         continue;
                     };
-                    if r.abs() >= half_width || (!closed && (s <= 0.0 || s >= l)) {
+                    if r.abs() >= reach || (!closed && (s <= 0.0 || s >= l)) {
                         continue;
                     }
                     let f = curve.frame(s);
@@ -443,9 +532,84 @@ impl Band {
         self.pos.is_empty()
     }
 
-    /// Half-width `R`, pixels.
+    /// Half-width `R`, pixels (of the window, for a band with a margin).
     pub fn half_width(&self) -> f64 {
         self.half_width
+    }
+
+    /// The margin beyond the half-width, pixels (0 unless built by
+    /// [`Band::build_windowed`]).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// Pixels that count at the last [`Band::recentre`]: those within the
+    /// half-width of the displaced curve ([`Band::len`] without a margin).
+    pub fn inside(&self) -> usize {
+        self.inside
+    }
+
+    /// Each pixel's weight before the window: `1 / (1 - kappa r)` (module
+    /// docs), times any robust factor.
+    pub fn full_weights(&self) -> &[f64] {
+        &self.full_weight
+    }
+
+    /// Set the weights before the window (one per pixel; a robust fit's
+    /// reweighting) and window them on the curve displaced by `lambda`
+    /// (coefficients in `basis`, the band's), as [`Band::recentre`].
+    ///
+    /// Panics if `weights` does not hold one weight per pixel.
+    pub(crate) fn set_full_weights(&mut self, weights: Vec<f64>, basis: &Basis, lambda: &[f64]) {
+        assert_eq!(weights.len(), self.len(), "one weight per band pixel");
+        self.full_weight = weights;
+        if self.margin > 0.0 {
+            self.recentre(basis, lambda);
+        } else {
+            self.weight.clone_from(&self.full_weight);
+        }
+    }
+
+    /// Window a band with a margin on the curve displaced by `lambda`
+    /// (coefficients in `basis`, the band's): a pixel counts with its
+    /// weight when `|r - U| < R`, with 0 otherwise (module docs). Returns
+    /// the sum of the weights. Without a margin, nothing changes.
+    pub fn recentre(&mut self, basis: &Basis, lambda: &[f64]) -> f64 {
+        if self.margin == 0.0 {
+            return self.weight.iter().sum();
+        }
+        let p = self.degree;
+        let h = self.half_width;
+        let (r, first, values, full) = (&self.r, &self.first, &self.basis, &self.full_weight);
+        let (sum, inside) = self
+            .weight
+            .par_chunks_mut(RECENTRE_CHUNK)
+            .enumerate()
+            .map(|(k, chunk)| {
+                let mut sum = 0.0;
+                let mut inside = 0;
+                for (j, w) in chunk.iter_mut().enumerate() {
+                    let i = k * RECENTRE_CHUNK + j;
+                    let first = first[i] as usize;
+                    let vals = &values[i * (p + 1)..(i + 1) * (p + 1)];
+                    let u: f64 = vals
+                        .iter()
+                        .enumerate()
+                        .map(|(k, v)| lambda[basis.index(first, k)] * v)
+                        .sum();
+                    *w = if (r[i] - u).abs() < h {
+                        inside += 1;
+                        full[i]
+                    } else {
+                        0.0
+                    };
+                    sum += *w;
+                }
+                (sum, inside)
+            })
+            .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        self.inside = inside;
+        sum
     }
 
     /// The profile of the virtual image.
@@ -490,6 +654,15 @@ impl Band {
     pub fn r(&self) -> &[f64] {
         &self.r
     }
+}
+
+/// Which pixels a band keeps: those within `reach` of the curve (one in
+/// `thin`), its profile taken with `half_width` (pixels).
+#[derive(Clone, Copy)]
+struct Cut {
+    half_width: f64,
+    reach: f64,
+    thin: usize,
 }
 
 /// The weight of a kept pixel when one in `thin` is kept (see

@@ -115,3 +115,60 @@ fn curve_or_band_outside_the_image_is_an_error() {
         Err(Error::CurveOutsideImage { .. })
     ));
 }
+
+/// A band with a margin holds the pixels out to `R + margin` and counts
+/// those within `R` of the curve displaced by `U` (here uniform: the basis
+/// is a partition of unity), with their full weights.
+#[test]
+fn a_windowed_band_counts_the_pixels_around_the_displaced_curve() {
+    use vicurve::fit::Coords;
+    let (cx, cy, r0, half, margin) = (100.4, 99.7, 50.0, 3.0, 0.5);
+    let curve = InitialCurve::Circle { cx, cy, r: r0 }.to_curve().unwrap();
+    let basis = Basis::new(3, 10, curve.param_length(), true).unwrap();
+    let mut band = Band::build_windowed(
+        &curve,
+        &basis,
+        half,
+        margin,
+        Kind::Silhouette,
+        200,
+        200,
+        Coords::Exact,
+    )
+    .unwrap();
+    let wide = Band::build(&curve, &basis, half + margin, Kind::Silhouette, 200, 200).unwrap();
+    assert_eq!(band.positions(), wide.positions());
+    assert_eq!(band.half_width(), half);
+    assert_eq!(band.margin(), margin);
+    let (r, full) = (band.r().to_vec(), band.full_weights().to_vec());
+    let counted = |u: f64| {
+        let inside: Vec<usize> = (0..r.len()).filter(|&i| (r[i] - u).abs() < half).collect();
+        let sum: f64 = inside.iter().map(|&i| full[i]).sum();
+        (inside.len(), sum)
+    };
+    assert_eq!(band.inside(), counted(0.0).0);
+    assert!(band.inside() < band.len());
+    for u in [0.3, -0.45] {
+        let lambda = vec![u; basis.n_functions()];
+        let sum = band.recentre(&basis, &lambda);
+        let (inside, expected) = counted(u);
+        assert_eq!(band.inside(), inside, "U = {u}");
+        assert!(
+            (sum - expected).abs() < 1e-9 * expected,
+            "U = {u}: {sum} vs {expected}"
+        );
+    }
+    for bad in [-0.1, f64::NAN] {
+        let err = Band::build_windowed(
+            &curve,
+            &basis,
+            half,
+            bad,
+            Kind::Silhouette,
+            200,
+            200,
+            Coords::Exact,
+        );
+        assert!(matches!(err, Err(Error::InvalidParameter { .. })), "{bad}");
+    }
+}

@@ -189,6 +189,24 @@ fn run_schedule(
     let min_el = if closed { p + 1 } else { 1 };
 
     let mut current = breaks::prepare(reference, &config.breaks)?;
+    // A tracked frame's run does not settle (see `track::TRACK_MARGIN`):
+    // its reference, the previous frame's curve, is refitted with control
+    // points one element apart first, as a settle's would be. The
+    // displacement cannot remove detail finer than its elements, which
+    // would otherwise stay in the result and pile up from frame to frame.
+    if let Some(t) = tracked {
+        let stage = t.stage();
+        let n = stage.element_count(current.param_length(), min_el);
+        let basis = breaks::displacement_basis(&current, p, n)?;
+        let spacing = basis.element_length().max(CURVE_SPACING);
+        let clip = Clip {
+            half_width: stage.half_width + track::TRACK_MARGIN,
+            width: sampler.width(),
+            height: sampler.height(),
+        };
+        let zero = vec![0.0; basis.n_functions()];
+        current = displaced(&current, &basis, &zero, spacing, clip)?;
+    }
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     let mut last: Option<Final> = None;
@@ -266,16 +284,40 @@ fn run_schedule(
                 (false, false) => 2,
                 (false, true) => 4,
             };
-            let built = Band::build_with(
-                &current,
-                &basis,
-                r,
-                profile,
-                width,
-                height,
-                thin,
-                config.coords,
-            );
+            // A tracked frame's band has a margin, so that its one run
+            // counts the pixels around the edge whatever the reference (see
+            // `track::TRACK_MARGIN`); where that band does not fit in the
+            // image, the plain one settles as the full schedule does.
+            let margin = match (tracked, pushed) {
+                (Some(_), Some(_)) => track::TRACK_MARGIN,
+                _ => 0.0,
+            };
+            let windowed = (margin > 0.0)
+                .then(|| {
+                    Band::build_windowed(
+                        &current,
+                        &basis,
+                        r,
+                        margin,
+                        profile,
+                        width,
+                        height,
+                        config.coords,
+                    )
+                })
+                .filter(|b| b.is_ok());
+            let built = windowed.unwrap_or_else(|| {
+                Band::build_with(
+                    &current,
+                    &basis,
+                    r,
+                    profile,
+                    width,
+                    height,
+                    thin,
+                    config.coords,
+                )
+            });
             let band = match built {
                 Ok(b) => b,
                 Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
@@ -366,15 +408,20 @@ fn run_schedule(
             tilt = corr.measured_tilt().cloned();
             let mut lambda = vec![0.0; corr.n_unknowns()];
             let budget = config.max_iterations.saturating_sub(iterations);
+            // A band with a margin needs no settle (see `track::TRACK_MARGIN`).
+            let windowed = corr.band.margin() > 0.0;
             // A run that a settle is sure to follow only places its reference.
-            let pre_settle = auto && is_last && !followed && settles == 0;
+            let pre_settle = auto && is_last && !followed && settles == 0 && !windowed;
             let tolerance = if pre_settle {
                 config.tolerance.max(PRE_SETTLE_TOLERANCE)
             } else {
                 config.tolerance
             };
+            // A windowed band serves displacements within its margin.
             let reref_limit = if rereferences >= MAX_REREFERENCES {
                 f64::INFINITY
+            } else if windowed {
+                corr.band.margin()
             } else {
                 config.rereference_fraction * r
             };
@@ -547,6 +594,7 @@ fn run_schedule(
                     let settle = auto
                         && is_last
                         && !followed
+                        && !windowed
                         && o == Outcome::Converged
                         && settles < MAX_SETTLES
                         && (settles == 0 || (moved > SETTLE_TOLERANCE && contracting));
@@ -938,7 +986,7 @@ fn robust_refit(
 ) -> (usize, bool) {
     let base: Vec<f64> = corr
         .band
-        .weight
+        .full_weights()
         .iter()
         .zip(&corr.robust)
         .map(|(w, k)| if *k > 0.0 { w / k } else { *w })
@@ -963,9 +1011,8 @@ fn robust_refit(
         let res: Vec<f64> = (0..corr.band.len()).into_par_iter().map(residual).collect();
         let robust: Vec<f64> = res.iter().map(|v| tukey_weight(*v, scale)).collect();
         let mut band = corr.band.clone();
-        for ((w, b), k) in band.weight.iter_mut().zip(&base).zip(&robust) {
-            *w = b * k;
-        }
+        let weights = base.iter().zip(&robust).map(|(b, k)| b * k).collect();
+        band.set_full_weights(weights, &corr.basis, lambda);
         let Ok(mut next) =
             Correlation::prepare(band, corr.basis.clone(), sampler, config.levels, None)
         else {

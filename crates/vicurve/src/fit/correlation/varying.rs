@@ -109,6 +109,9 @@ impl Varying {
                 let mut tmp = vec![0.0; dim];
                 for i in range {
                     let w = band.weight[i];
+                    if w == 0.0 {
+                        continue;
+                    }
                     let (g, dg) = (band.gamma[i], band.dgamma[i]);
                     let feats = features(g);
                     levels.accumulate(i, w, feats, 0.0, Some(&mut s_blocks), &mut tmp);
@@ -317,6 +320,11 @@ impl Correlation {
                     .enumerate()
                 {
                     let i = start + j;
+                    let w = band.weight[i];
+                    if w == 0.0 && pushed.is_some() {
+                        // Out of the window (or rejected): counts for nothing.
+                        continue;
+                    }
                     let first = band.first[i] as usize;
                     let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
                     let mut u = 0.0;
@@ -357,7 +365,6 @@ impl Correlation {
                     *fo = f;
                     *go = gamma;
                     *so = scale;
-                    let w = band.weight[i];
                     let mat = pushed.is_some().then_some(&mut acc.mat_t[..]);
                     let [f0, f1] = features(gamma);
                     let feats = [f0 * scale, f1 * scale];
@@ -459,10 +466,13 @@ impl Correlation {
             let start = k * per;
             let end = (start + per).min(band.len());
             for i in start..end {
+                let w = band.weight[i];
+                if w == 0.0 && pushed.is_some() {
+                    continue;
+                }
                 let first = band.first[i] as usize;
                 let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
                 let (a, c) = lb.levels(i, theta);
-                let w = band.weight[i];
                 let dg = band.dgamma[i];
                 let r = (a + c * gbuf[i]) * sbuf[i] - fbuf[i];
                 let x = w * c * r * dnow[i];
