@@ -147,8 +147,10 @@ pub struct FitConfig {
     pub stages: Option<Vec<Stage>>,
     /// Image interpolation. Default: see [`Interpolation::default`].
     pub interpolation: Interpolation,
-    /// Convergence: stop a stage when `max |dLambda|` is under this, pixels.
-    /// Default: 1e-4.
+    /// Convergence: stop a run when `max |dLambda|` is under this, pixels,
+    /// or when the steps contract fast enough that the ones still to come
+    /// would add up to less (estimated from the last three steps, with a
+    /// factor 2 of safety). Default: 1e-4.
     pub tolerance: f64,
     /// Iteration limit per stage. Default: 200.
     pub max_iterations: usize,

@@ -110,6 +110,9 @@ const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
 /// may keep a model that does not fit the image from contracting. Runs
 /// that converge take 2 to 6.
 const DISPLACED_GRADIENT_ITERATIONS: usize = 12;
+/// Contraction ratio of successive steps under which a run's error left
+/// is estimated (`error_left`).
+const FAST_CONTRACTION: f64 = 0.25;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -759,7 +762,7 @@ enum Run {
 }
 
 /// Iterate on one reference until convergence (a step under `tolerance`,
-/// pixels), the iteration `budget`, a displacement past `reref_limit`
+/// pixels, or a step that leaves less than that: `error_left`), the iteration `budget`, a displacement past `reref_limit`
 /// (pixels) or a failure. Returns how it
 /// ended and the iterations used; `step` keeps the last successful step.
 #[allow(clippy::too_many_arguments)]
@@ -777,6 +780,8 @@ fn iterate_to_end(
     let mut relax = Relaxation::new(lambda.len());
     let cap = config.max_step_fraction * r;
     let mut used = 0;
+    // The two raw steps before this one (pixels), for `error_left`.
+    let mut previous_steps = [f64::INFINITY; 2];
     loop {
         if used >= budget {
             return (Run::IterationLimit, used);
@@ -816,12 +821,32 @@ fn iterate_to_end(
         for (l, d) in lambda.iter_mut().zip(&corr.delta) {
             *l += scale * d;
         }
-        if s.max_step < tolerance {
+        if s.max_step < tolerance || error_left(s.max_step, previous_steps) < tolerance {
             return (Run::Converged, used);
         }
+        previous_steps = [previous_steps[1], s.max_step];
         if lambda.iter().any(|l| l.abs() > reref_limit) {
             return (Run::Rereference, used);
         }
+    }
+}
+
+/// The error (pixels) that remains once a step of `step` is applied, the
+/// two steps before it being `previous` (older first): Gauss–Newton with a
+/// constant matrix contracts linearly, and with `q` the larger ratio of
+/// the last three steps the steps still to come add up to about `step q /
+/// (1 - q)`; taken twice for safety, and only once three steps show a
+/// good contraction (`q` under `FAST_CONTRACTION`), infinite otherwise. A
+/// run whose next step would be far under the tolerance then stops one
+/// iteration earlier: on a tracked frame, steps of 0.37, 9.5e-3 and
+/// 4.3e-4 px (then 5.4e-5) stop after the third, with about 4e-5 px left
+/// (1e-4 px tolerance).
+fn error_left(step: f64, previous: [f64; 2]) -> f64 {
+    let q = (step / previous[1]).max(previous[1] / previous[0]);
+    if previous[0].is_finite() && q < FAST_CONTRACTION {
+        2.0 * step * q / (1.0 - q)
+    } else {
+        f64::INFINITY
     }
 }
 
