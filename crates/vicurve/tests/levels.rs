@@ -81,8 +81,8 @@ fn measure_with(image: &Image, levels: LevelModel) -> (Measurement, ErrorStats) 
 /// The light also tilts each plateau across the band; the pixel-edge stage
 /// measures that tilt beyond the band and models it (see
 /// `fit::correlation::tilt`). Without it the blurred disc came out
-/// -5.1e-3 px on average and 3.8e-2 px at worst; with it, -7.2e-4 and
-/// 1.1e-2 px (sharp: -8.9e-5 and 2.2e-3 px).
+/// -5.1e-3 px on average and 3.8e-2 px at worst; with it, -6.2e-4 and
+/// 1.1e-2 px (sharp: -1.2e-4 and 2.3e-3 px).
 #[test]
 fn disc_under_an_illumination_gradient() {
     for (blur, max_bias, max_error) in [(0.0, 2e-3, 5e-3), (1.5, 2e-3, 2e-2)] {

@@ -113,6 +113,10 @@ const DISPLACED_GRADIENT_ITERATIONS: usize = 12;
 /// Contraction ratio of successive steps under which a run's error left
 /// is estimated (`error_left`).
 const FAST_CONTRACTION: f64 = 0.25;
+/// Spacing of the points of `x0 + U n` the output curve is fitted to
+/// (control points `CURVE_SPACING` apart: four points per interval),
+/// pixels.
+const FINE_STEP: f64 = 0.5;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -1216,7 +1220,7 @@ impl Final {
         degree: usize,
         blur: Option<f64>,
     ) -> Result<(SplineCurve, f64, Vec<Sample>, Vec<LevelSample>)> {
-        let fine_step = (0.25f64).min(spacing);
+        let fine_step = FINE_STEP.min(spacing);
         let l = self.reference.param_length();
         let closed = self.reference.is_closed();
         let (params, mut pts, corners) =

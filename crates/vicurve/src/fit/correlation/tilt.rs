@@ -13,7 +13,7 @@
 //!
 //! `tau` is measured on the plateaus beyond the band, where the virtual
 //! image is flat: on each side of every band pixel near the curve
-//! (`|r| <= 0.5` px), a line `alpha + beta r` is fitted to the pixels
+//! (`|r| <= NEAR` px), a line `alpha + beta r` is fitted to the pixels
 //! nearest the normal from `r_in` to `r_in + PLATEAU_WIDTH` px out (their
 //! own values, not interpolated ones), with `r_in` past the band and
 //! four blur deviations and 2 px, so that the edge's tail does not pass
@@ -35,6 +35,10 @@ use crate::solver::chunked::chunked_sum;
 use crate::solver::DenseCholesky;
 use rayon::prelude::*;
 
+/// Band pixels within this of the curve (pixels) estimate the tilt: about
+/// one per pixel of its length (each reads `2 PLATEAU_WIDTH /
+/// PLATEAU_STEP + 2` pixels), some 20 per function of the levels' basis.
+const NEAR: f64 = 0.25;
 /// Width of each plateau sampled, pixels.
 const PLATEAU_WIDTH: f64 = 4.0;
 /// Spacing of the samples on a plateau, pixels.
@@ -175,7 +179,7 @@ fn pixel_tilts(
     count: usize,
 ) -> Option<[f64; 3]> {
     let r0 = band.r[i];
-    if r0.abs() > 0.5 {
+    if r0.abs() > NEAR {
         return None;
     }
     let [x, y] = band.pos[i];
