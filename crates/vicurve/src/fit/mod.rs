@@ -766,9 +766,10 @@ enum Run {
 }
 
 /// Iterate on one reference until convergence (a step under `tolerance`,
-/// pixels, or a step that leaves less than that: `error_left`), the iteration `budget`, a displacement past `reref_limit`
-/// (pixels) or a failure. Returns how it
-/// ended and the iterations used; `step` keeps the last successful step.
+/// pixels, or a step that leaves less than that: `error_left`), the
+/// iteration `budget`, a displacement past `reref_limit` (pixels) or a
+/// failure. Returns how it ended and the iterations used; `step` keeps the
+/// last successful step.
 #[allow(clippy::too_many_arguments)]
 fn iterate_to_end(
     corr: &mut Correlation,
