@@ -168,14 +168,9 @@ impl Band {
                 format!("{margin} px (must be 0 or more)"),
             ));
         }
-        let mut band = Band::build_inner(
+        Band::build_inner(
             curve, basis, half_width, margin, profile, width, height, 1, coords,
-        )?;
-        if margin > 0.0 {
-            let zero = vec![0.0; basis.n_functions()];
-            band.recentre(basis, &zero);
-        }
-        Ok(band)
+        )
     }
 
     /// [`Band::build`], keeping one pixel in `thin` (each with `thin` times
@@ -255,7 +250,7 @@ impl Band {
         let mut band = Band {
             half_width,
             margin,
-            inside: total,
+            inside: 0,
             profile,
             degree: p,
             pos: Vec::with_capacity(total),
@@ -267,7 +262,7 @@ impl Band {
             gamma: Vec::with_capacity(total),
             dgamma: Vec::with_capacity(total),
             weight: Vec::with_capacity(total),
-            full_weight: Vec::new(),
+            full_weight: Vec::with_capacity(total),
             curvature: Vec::with_capacity(total),
         };
         for c in rows.into_iter().flatten() {
@@ -279,10 +274,14 @@ impl Band {
             band.basis.extend_from_slice(&c.basis[..=p]);
             band.gamma.push(c.gamma);
             band.dgamma.push(c.dgamma);
-            band.weight.push(c.weight);
+            band.full_weight.push(c.weight);
             band.curvature.push(c.curvature);
+            // With a margin, the pixels within `half_width` of the
+            // reference count until the first `recentre`.
+            let counts = c.r.abs() < half_width;
+            band.weight.push(if counts { c.weight } else { 0.0 });
+            band.inside += usize::from(counts);
         }
-        band.full_weight.clone_from(&band.weight);
         Ok(band)
     }
 

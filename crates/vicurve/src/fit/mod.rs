@@ -299,21 +299,7 @@ fn run_schedule(
                 (Some(_), Some(_)) => track::TRACK_MARGIN,
                 _ => 0.0,
             };
-            let windowed = (margin > 0.0)
-                .then(|| {
-                    Band::build_windowed(
-                        &current,
-                        &basis,
-                        r,
-                        margin,
-                        profile,
-                        width,
-                        height,
-                        config.coords,
-                    )
-                })
-                .filter(|b| b.is_ok());
-            let built = windowed.unwrap_or_else(|| {
+            let plain = || {
                 Band::build_with(
                     &current,
                     &basis,
@@ -324,7 +310,14 @@ fn run_schedule(
                     thin,
                     config.coords,
                 )
-            });
+            };
+            let built = if margin > 0.0 {
+                let coords = config.coords;
+                Band::build_windowed(&current, &basis, r, margin, profile, width, height, coords)
+                    .or_else(|_| plain())
+            } else {
+                plain()
+            };
             let band = match built {
                 Ok(b) => b,
                 Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {

@@ -35,9 +35,10 @@ use crate::solver::chunked::chunked_sum;
 use crate::solver::DenseCholesky;
 use rayon::prelude::*;
 
-/// Band pixels within this of the curve (pixels) estimate the tilt: about
-/// one per pixel of its length (each reads `2 PLATEAU_WIDTH /
-/// PLATEAU_STEP + 2` pixels), some 20 per function of the levels' basis.
+/// Band pixels within this of the curve (pixels) estimate the tilt: a
+/// strip `2 NEAR` px wide, about one pixel per two of the curve's length
+/// (each reads `2 PLATEAU_WIDTH / PLATEAU_STEP + 2` pixels), some 20 per
+/// function of the levels' basis (40 px elements).
 const NEAR: f64 = 0.25;
 /// Width of each plateau sampled, pixels.
 const PLATEAU_WIDTH: f64 = 4.0;
