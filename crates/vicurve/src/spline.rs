@@ -222,7 +222,7 @@ impl Basis {
         e: usize,
     ) -> (usize, [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]) {
         match &self.knotted {
-            None => (e, cardinal_polynomials(self.degree)),
+            None => (e, cardinal_table()[self.degree]),
             Some(k) => (k.el_first[e], k.pieces[e]),
         }
     }
@@ -440,6 +440,14 @@ pub(crate) fn mul_linear(q: &[f64; MAX_DEGREE + 1], c0: f64, c1: f64) -> [f64; M
         }
     }
     out
+}
+
+/// [`cardinal_polynomials`] of every degree, made once: a curve's
+/// constructor asks for them on each of its elements.
+fn cardinal_table() -> &'static [[[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]; MAX_DEGREE + 1] {
+    static TABLE: std::sync::OnceLock<[[[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1]; MAX_DEGREE + 1]> =
+        std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(cardinal_polynomials))
 }
 
 /// Power-basis coefficients of the `p + 1` uniform B-spline pieces on one

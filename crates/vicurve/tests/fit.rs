@@ -510,3 +510,64 @@ fn edge_from_border_to_border() {
     assert!(first < 25.0 && last > 486.0, "x from {first} to {last}");
     assert!(s.max_abs < 0.05 && s.bias.abs() < 5e-3, "{s:?}");
 }
+
+/// The output samples are at most `sample_spacing` apart along the curve,
+/// and not needlessly closer (at least 0.9 of it, median): a displacement
+/// that stretches the reference a little must not halve their spacing.
+#[test]
+fn output_samples_follow_the_requested_spacing() {
+    let spec = RenderSpec {
+        shape: Shape::Ellipse {
+            cx: 200.37,
+            cy: 199.71,
+            a: 120.0,
+            b: 45.0,
+            angle: 0.4,
+        },
+        ..disc_spec(0.0, Method::Coverage, 0.01)
+    };
+    // A start off the edge by up to 3 px: a 24-gon on a nearby ellipse.
+    let points = (0..24)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 24.0;
+            let (x, y) = (117.0 * t.cos(), 47.0 * t.sin());
+            let (c, s) = (0.38f64.cos(), 0.38f64.sin());
+            [201.0 + c * x - s * y, 199.0 + s * x + c * y]
+        })
+        .collect();
+    let init = InitialCurve::Polyline {
+        points,
+        closed: true,
+    };
+    for spacing in [0.35, 1.0, 2.5] {
+        let config = FitConfig {
+            sample_spacing: spacing,
+            ..FitConfig::default()
+        };
+        let (m, s) = run(&spec, init.clone(), config);
+        assert_eq!(m.outcome, Outcome::Converged);
+        assert!(
+            s.max_abs < 0.05,
+            "spacing {spacing}: largest error {}",
+            s.max_abs
+        );
+        let mut gaps: Vec<f64> = m
+            .samples
+            .windows(2)
+            .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
+            .collect();
+        let (first, last) = (&m.samples[0], &m.samples[m.samples.len() - 1]);
+        gaps.push((first.x - last.x).hypot(first.y - last.y));
+        gaps.sort_by(f64::total_cmp);
+        let (median, largest) = (gaps[gaps.len() / 2], gaps[gaps.len() - 1]);
+        println!("spacing {spacing}: median {median:.4} largest {largest:.4} px");
+        assert!(
+            largest <= spacing * (1.0 + 1e-9),
+            "spacing {spacing}: gap {largest}"
+        );
+        assert!(
+            median >= 0.9 * spacing,
+            "spacing {spacing}: median gap {median}"
+        );
+    }
+}

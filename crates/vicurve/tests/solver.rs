@@ -79,6 +79,34 @@ fn dense_mul(d: &[f64], x: &[f64]) -> Vec<f64> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
+    /// Outer products of consecutive (wrapping) indices, as B-spline
+    /// assemblies add them, against a dense matrix summed from the
+    /// definition, on top of a random matrix.
+    #[test]
+    fn add_outer_matches_dense(
+        (n, p, c, off, margin, x) in matrix_case(),
+        blocks in prop::collection::vec((0..60usize, 0..=5usize, -3.0..3.0f64), 1..8),
+    ) {
+        let (mut m, mut d) = build(n, p, c, &off, &margin);
+        for (first, len, scale) in blocks {
+            // A block in the pattern: at most p + 1 long, within an open
+            // matrix's rows.
+            let len = len.min(p.min(n - 1)) + 1;
+            let first = if c { first % n } else { first % (n - len + 1) };
+            let v: Vec<f64> = (0..len).map(|k| x[(first + 3 * k) % n] * 0.1 + 0.5).collect();
+            m.add_outer(first, scale, &v);
+            for a in 0..len {
+                for b in 0..len {
+                    d[((first + a) % n) * n + (first + b) % n] += scale * v[a] * v[b];
+                }
+            }
+        }
+        let got = m.to_dense();
+        for (g, want) in got.iter().zip(&d) {
+            prop_assert!((g - want).abs() <= 1e-12 * (1.0 + want.abs()), "{} vs {}", g, want);
+        }
+    }
+
     #[test]
     fn storage_matches_dense((n, p, c, off, margin, x) in matrix_case()) {
         let (m, d) = build(n, p, c, &off, &margin);

@@ -242,14 +242,12 @@ impl SplineCurve {
                 let mut v = [0.0; MAX_DEGREE + 1];
                 for (p, &u) in pts[range.clone()].iter().zip(&params[range]) {
                     let first = basis.eval(u, &mut v);
-                    for a in 0..=degree {
+                    for (a, va) in v[..=degree].iter().enumerate() {
                         let ia = basis.index(first, a);
-                        rhs_x[ia] += v[a] * p[0];
-                        rhs_y[ia] += v[a] * p[1];
-                        for b in a..=degree {
-                            m.add(ia, basis.index(first, b), v[a] * v[b]);
-                        }
+                        rhs_x[ia] += va * p[0];
+                        rhs_y[ia] += va * p[1];
                     }
+                    m.add_outer(first, 1.0, &v[..=degree]);
                 }
                 (m, rhs_x, rhs_y)
             },
@@ -468,7 +466,10 @@ pub(crate) fn frame_from(p: [f64; 2], d1: [f64; 2], d2: [f64; 2]) -> Frame {
 
 #[inline]
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
+    // Not `hypot`: its guard against overflow costs several times more,
+    // and pixel coordinates are nowhere near the range where it matters.
+    let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
+    (dx * dx + dy * dy).sqrt()
 }
 
 /// Twice the signed area of a closed polygon in the (x, y) frame; negative

@@ -212,15 +212,12 @@ impl Correlation {
                     sums[0] += w;
                     sums[1] += w * g;
                     sums[2] += w * g * g;
-                    for a in 0..=p {
+                    for (a, va) in vals.iter().enumerate() {
                         let ia = basis.index(first, a);
-                        g1[ia] += w * dg * vals[a];
-                        g2[ia] += w * g * dg * vals[a];
-                        let wa = w * dg * dg * vals[a];
-                        for (b, vb) in vals.iter().enumerate().skip(a) {
-                            m.add(ia, basis.index(first, b), wa * vb);
-                        }
+                        g1[ia] += w * dg * va;
+                        g2[ia] += w * g * dg * va;
                     }
+                    m.add_outer(first, w * dg * dg, vals);
                 }
                 (m, g1, g2, sums)
             },

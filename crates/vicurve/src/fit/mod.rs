@@ -45,8 +45,14 @@ use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
 
-/// Spacing of the samples used to rebuild a reference curve, pixels.
+/// Spacing of the samples used to rebuild a reference curve, pixels (the
+/// smallest; see `reference_sample_step`).
 const REFERENCE_SAMPLE_STEP: f64 = 0.5;
+/// Samples per control-point interval of a rebuilt reference, at least
+/// (`reference_sample_step`).
+const REFERENCE_SAMPLES_PER_INTERVAL: f64 = 16.0;
+/// Largest spacing of those samples, pixels.
+const MAX_REFERENCE_SAMPLE_STEP: f64 = 2.0;
 /// Control-point spacing of output curves, and the smallest of reference
 /// curves, pixels.
 const CURVE_SPACING: f64 = 2.0;
@@ -113,10 +119,14 @@ const DISPLACED_GRADIENT_ITERATIONS: usize = 12;
 /// Contraction ratio of successive steps under which a run's error left
 /// is estimated (`error_left`).
 const FAST_CONTRACTION: f64 = 0.25;
-/// Spacing of the points of `x0 + U n` the output curve is fitted to
-/// (control points `CURVE_SPACING` apart: four points per interval),
-/// pixels.
+/// Largest spacing of the points of `x0 + U n` the output curve is fitted
+/// to (control points `CURVE_SPACING` apart: four points per interval),
+/// pixels; see `Final::samples` for the spacing taken.
 const FINE_STEP: f64 = 0.5;
+/// How much the displacement may stretch the reference (`1 + U kappa`)
+/// before the output samples, every `k`-th point of `x0 + U n`, come
+/// closer than the requested spacing (`Final::samples`).
+const STRETCH_ALLOWANCE: f64 = 0.03;
 /// Spacing of [`Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
 /// Band pixels used to fit the blur of the pixel-edge profile at most.
@@ -1214,7 +1224,13 @@ impl Final {
         degree: usize,
         blur: Option<f64>,
     ) -> Result<(SplineCurve, f64, Vec<Sample>, Vec<LevelSample>)> {
-        let fine_step = FINE_STEP.min(spacing);
+        // The output samples are every `per`-th of the points of `x0 + U
+        // n`, so that they are at most `spacing` apart: the points are
+        // taken a little closer than `spacing / per` on the reference, for
+        // the displacement's stretch (else, a chord a hair over half a
+        // pixel would make every point an output sample at 0.5 px).
+        let per = (spacing / FINE_STEP).ceil().max(1.0);
+        let fine_step = spacing / per / (1.0 + STRETCH_ALLOWANCE);
         let l = self.reference.param_length();
         let closed = self.reference.is_closed();
         let (params, mut pts, corners) =
@@ -1232,15 +1248,22 @@ impl Final {
             curve = SplineCurve::fit_with_corners(&pts, closed, degree, CURVE_SPACING, &corners)?;
             s = chord_lengths(&pts);
         }
-        // Robust weights binned by the reference parameter, 1 px bins.
-        let nbins = l.ceil() as usize + 1;
+        // Robust weights binned by the reference parameter, 1 px bins (none
+        // when no pixel was reweighted: the weight is 1 everywhere).
+        let reweighted = self.corr.robust.iter().any(|&w| w != 1.0);
+        let nbins = if reweighted { l.ceil() as usize + 1 } else { 0 };
         let mut bins = vec![(0.0, 0.0); nbins];
-        for (i, &u) in self.corr.band.s.iter().enumerate() {
-            let b = &mut bins[(u.max(0.0) as usize).min(nbins - 1)];
-            b.0 += self.corr.robust[i];
-            b.1 += 1.0;
+        if reweighted {
+            for (i, &u) in self.corr.band.s.iter().enumerate() {
+                let b = &mut bins[(u.max(0.0) as usize).min(nbins - 1)];
+                b.0 += self.corr.robust[i];
+                b.1 += 1.0;
+            }
         }
         let weight_at = |u: f64| {
+            if !reweighted {
+                return 1.0;
+            }
             let k = (u.max(0.0) as usize).min(nbins - 1);
             let (mut sum, mut n) = (0.0, 0.0);
             for b in &bins[k.saturating_sub(1)..=(k + 1).min(nbins - 1)] {
@@ -1335,6 +1358,18 @@ fn reference_spacing(basis: &Basis) -> f64 {
         .clamp(CURVE_SPACING, MAX_REFERENCE_SPACING)
 }
 
+/// Spacing of the points of `x0 + U n` a new reference with control points
+/// `spacing` pixels apart is fitted to, pixels: half a pixel, or
+/// `REFERENCE_SAMPLES_PER_INTERVAL` per interval of a coarser reference
+/// (whose fit averages over many more points than it needs: a tracked
+/// frame's start, refitted with control points an element (40 px) apart,
+/// took 5 times longer from points 0.5 px apart), up to
+/// `MAX_REFERENCE_SAMPLE_STEP`.
+fn reference_sample_step(spacing: f64) -> f64 {
+    (spacing / REFERENCE_SAMPLES_PER_INTERVAL)
+        .clamp(REFERENCE_SAMPLE_STEP, MAX_REFERENCE_SAMPLE_STEP)
+}
+
 /// Where an open curve's new reference must stay: its band, of this
 /// half-width, inside an image of this size.
 #[derive(Clone, Copy, Debug)]
@@ -1364,7 +1399,7 @@ fn displaced(
         return breaks::displaced(reference, basis, lambda, spacing);
     }
     let l = reference.param_length();
-    let count = (l / REFERENCE_SAMPLE_STEP).ceil() as usize;
+    let count = (l / reference_sample_step(spacing)).ceil() as usize;
     let closed = reference.is_closed();
     let params = reference.sample_params(if closed { count } else { count + 1 });
     let pts: Vec<[f64; 2]> = params

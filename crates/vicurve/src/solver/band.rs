@@ -140,6 +140,56 @@ impl SymBandMatrix {
         }
     }
 
+    /// Adds `scale v v^T` to the block of rows and columns `first,
+    /// first + 1, ..., first + v.len() - 1` (wrapping around past `n - 1`
+    /// when cyclic): one point's contribution to a B-spline least-squares
+    /// matrix, whose `p + 1` non-zero functions are consecutive. The same
+    /// as [`SymBandMatrix::add`] over the pairs `a <= b` with `scale v[a]
+    /// v[b]`, writing each row's slots in turn instead of locating every
+    /// pair (a modulo per pair on a cyclic matrix): this sits in the
+    /// per-pixel and per-point loops that assemble the systems.
+    ///
+    /// `first` is taken modulo `n` on a cyclic matrix. Panics when `v` is
+    /// longer than `n` or when an open matrix's block would pass its last
+    /// row; the block must lie in the pattern (`v.len() <= p + 1`), as for
+    /// `add`.
+    #[inline]
+    pub fn add_outer(&mut self, first: usize, scale: f64, v: &[f64]) {
+        let n = self.n;
+        let len = v.len();
+        // A periodic basis may number its first function past the end.
+        let first = if self.cyclic { first % n } else { first };
+        assert!(
+            len <= n && (self.cyclic || first + len <= n),
+            "add_outer: block out of range"
+        );
+        match self.layout {
+            Layout::Band { q } if len <= q + 1 => {
+                let w = q + 1;
+                for (b, vb) in v.iter().enumerate() {
+                    let mut row = first + b;
+                    if row >= n {
+                        row -= n;
+                    }
+                    // Slot `d` of row `first + b` is column `first + b - d`.
+                    let slots = &mut self.data[row * w..row * w + b + 1];
+                    let sb = scale * vb;
+                    for (slot, va) in slots.iter_mut().zip(v[..=b].iter().rev()) {
+                        *slot += sb * va;
+                    }
+                }
+            }
+            _ => {
+                for b in 0..len {
+                    for a in 0..=b {
+                        let (i, j) = ((first + a) % n, (first + b) % n);
+                        self.add(i, j, scale * v[b] * v[a]);
+                    }
+                }
+            }
+        }
+    }
+
     /// `M[i][j]`: 0 outside the pattern. Panics if an index is `>= n`.
     #[inline]
     pub fn get(&self, i: usize, j: usize) -> f64 {
