@@ -22,11 +22,12 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use vicurve::curve::{InitialCurve, SplineCurve};
 use vicurve::derived::{width_profile, WidthAxis};
 use vicurve::fit::{
-    measure_from, measure_tracked_from, FitConfig, Measurement, Outcome, TrackState,
+    measure_from, measure_tracked_cached, FitConfig, Measurement, Outcome, TrackCache,
+    TrackSnapshot, TrackState,
 };
 use vicurve::interp::{Interpolation, Sampler};
 use vicurve::Image;
@@ -47,12 +48,20 @@ pub struct Previous {
     pub curve: SplineCurve,
     pub stem: String,
     pub state: Option<TrackState>,
+    /// The band its frame left for the next one, written down (see
+    /// [`vicurve::fit::TrackCache`]).
+    pub band: Option<TrackSnapshot>,
 }
 
 /// The state a sequence carries from frame to frame.
 pub struct Tracking {
     /// Per curve of the job.
     pub last_good: Vec<Option<Previous>>,
+    /// Per curve of the job: the band the last good frame left
+    /// ([`TrackCache`]), as that frame's measurement left it in memory or
+    /// as read back from its result file (the same numbers, so that a
+    /// resumed run goes on exactly as an uninterrupted one).
+    pub caches: Vec<Mutex<TrackCache>>,
     /// Per width of the job: the axis, fixed for the whole sequence (an
     /// estimated axis is estimated once, on the first frame where both
     /// curves are good, so that positions compare between frames).
@@ -63,6 +72,7 @@ impl Tracking {
     pub fn new(job: &Job) -> Tracking {
         Tracking {
             last_good: vec![None; job.curves.len()],
+            caches: job.curves.iter().map(|_| Mutex::default()).collect(),
             axes: job
                 .widths
                 .iter()
@@ -79,22 +89,42 @@ impl Tracking {
     }
 
     /// Take the good curves of a frame (as written: see [`crate::resume`])
-    /// with their tracking states, and fix the estimated axes that are not
-    /// yet.
+    /// with their tracking states and bands, and fix the estimated axes
+    /// that are not yet. `measured`: the frame was just measured, and the
+    /// caches hold what its good curves left (else it was read back, and
+    /// they are made from `bands`). A curve that is not good goes on from
+    /// its last good frame, band included.
     pub fn update(
         &mut self,
         job: &Job,
         stem: &str,
         good: &[Option<SplineCurve>],
         states: &[Option<TrackState>],
+        bands: &[Option<TrackSnapshot>],
+        measured: bool,
     ) {
-        for ((slot, g), state) in self.last_good.iter_mut().zip(good).zip(states) {
-            if let Some(c) = g {
-                *slot = Some(Previous {
-                    curve: c.clone(),
-                    stem: stem.to_string(),
-                    state: *state,
-                });
+        let curves = self.last_good.iter_mut().zip(&self.caches);
+        for (((slot, cache), g), (state, band)) in curves.zip(good).zip(states.iter().zip(bands)) {
+            let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
+            match g {
+                Some(c) => {
+                    *slot = Some(Previous {
+                        curve: c.clone(),
+                        stem: stem.to_string(),
+                        state: *state,
+                        band: band.clone(),
+                    });
+                    if !measured {
+                        *cache = band
+                            .clone()
+                            .map(TrackCache::from_snapshot)
+                            .unwrap_or_default();
+                    }
+                }
+                None => {
+                    let last = slot.as_ref().and_then(|p| p.band.clone());
+                    *cache = last.map(TrackCache::from_snapshot).unwrap_or_default();
+                }
             }
         }
         for (w, axis) in job.widths.iter().zip(self.axes.iter_mut()) {
@@ -176,6 +206,11 @@ struct SequenceInfo<'a> {
     /// A retry, when there was one.
     #[serde(skip_serializing_if = "str::is_empty")]
     note: &'a str,
+    /// The band the fit leaves for the next frame (see
+    /// [`vicurve::fit::TrackCache`]), so that a resumed run reuses it as an
+    /// uninterrupted one does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    track_band: Option<&'a TrackSnapshot>,
 }
 
 /// The result file of `measure --out` and the sequence record.
@@ -195,6 +230,8 @@ struct CurveResult {
     config: FitConfig,
     started_from: String,
     note: String,
+    /// What the curve's cache holds after the fit, written down.
+    band: Option<TrackSnapshot>,
 }
 
 /// What a frame produced.
@@ -205,6 +242,8 @@ pub struct FrameOutput {
     pub good: Vec<Option<SplineCurve>>,
     /// What the next frame's tracking schedule takes from them.
     pub states: Vec<Option<TrackState>>,
+    /// The bands they leave for the next frame, written down.
+    pub bands: Vec<Option<TrackSnapshot>>,
     /// One line per problem, for the log.
     pub problems: Vec<String>,
 }
@@ -250,15 +289,18 @@ pub fn measure_frame(
         .curves
         .par_iter()
         .zip(tracking.last_good.par_iter())
-        .map(|(spec, prev)| {
+        .zip(tracking.caches.par_iter())
+        .map(|((spec, prev), cache)| {
             let prev = if job.track { prev.as_ref() } else { None };
-            measure_curve(spec, prev, &sampler)
+            let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
+            measure_curve(spec, prev, &mut cache, &sampler)
         })
         .collect();
 
     let mut rows = Vec::new();
     let mut good: Vec<Option<SplineCurve>> = vec![None; job.curves.len()];
     let mut states: Vec<Option<TrackState>> = vec![None; job.curves.len()];
+    let bands: Vec<Option<TrackSnapshot>> = results.iter().map(|r| r.band.clone()).collect();
     let mut measured: Vec<Option<&Measurement>> = vec![None; job.curves.len()];
     let mut problems = Vec::new();
     for (i, (spec, r)) in job.curves.iter().zip(&results).enumerate() {
@@ -285,6 +327,7 @@ pub fn measure_frame(
                 curve: &spec.name,
                 started_from: &r.started_from,
                 note: &r.note,
+                track_band: r.band.as_ref(),
             },
         };
         let written = write_curve_files(job, files, &spec.name, &record, m);
@@ -386,6 +429,7 @@ pub fn measure_frame(
         rows,
         good,
         states,
+        bands,
         problems,
     }
 }
@@ -403,6 +447,7 @@ fn unreadable(job: &Job, stem: &str, reason: &str) -> FrameOutput {
         rows,
         good: vec![None; job.curves.len()],
         states: vec![None; job.curves.len()],
+        bands: vec![None; job.curves.len()],
         problems: vec![format!("{stem}: {reason}")],
     }
 }
@@ -412,10 +457,26 @@ fn unreadable(job: &Job, stem: &str, reason: &str) -> FrameOutput {
 /// and the previous frame left a state; the tracked configuration's own
 /// schedule when that cannot measure), or from its start with the first; a
 /// tracked fit that fails is tried again from the same curve with the first
-/// frame's configuration when the two differ.
+/// frame's configuration when the two differ. The tracking schedule
+/// measures on the band `cache` keeps when it serves, and leaves this
+/// frame's there (the result records it, written down); any other fit
+/// empties the cache.
 fn measure_curve<'s>(
     spec: &CurveSpec,
     prev: Option<&Previous>,
+    cache: &mut TrackCache,
+    sampler: &dyn Fn(Interpolation) -> Option<&'s Sampler>,
+) -> CurveResult {
+    let mut result = measure_curve_with(spec, prev, cache, sampler);
+    result.band = cache.snapshot();
+    result
+}
+
+/// [`measure_curve`] but for the band it records.
+fn measure_curve_with<'s>(
+    spec: &CurveSpec,
+    prev: Option<&Previous>,
+    cache: &mut TrackCache,
     sampler: &dyn Fn(Interpolation) -> Option<&'s Sampler>,
 ) -> CurveResult {
     let run = |reference: SplineCurve, config: &FitConfig| -> Result<Measurement, String> {
@@ -425,6 +486,7 @@ fn measure_curve<'s>(
     };
     match prev {
         None => {
+            cache.clear();
             let measured = spec
                 .init
                 .to_curve()
@@ -436,6 +498,7 @@ fn measure_curve<'s>(
                 config: spec.first.clone(),
                 started_from: "init".into(),
                 note: String::new(),
+                band: None,
             }
         }
         Some(p) => {
@@ -446,22 +509,29 @@ fn measure_curve<'s>(
             let start = match tracked_start(&p.curve) {
                 Ok(c) => c,
                 Err(e) => {
+                    cache.clear();
                     return CurveResult {
                         measured: Err(e),
                         init,
                         config: spec.tracked.clone(),
                         started_from: p.stem.clone(),
                         note: String::new(),
+                        band: None,
                     };
                 }
             };
-            let short = match (spec.tracking_schedule, &p.state) {
-                (true, Some(state)) => sampler(Interpolation::Bilinear).and_then(|s| {
-                    measure_tracked_from(s, start.clone(), state, &spec.tracked)
+            let plain = sampler(Interpolation::Bilinear);
+            let short = match (spec.tracking_schedule, &p.state, plain) {
+                (true, Some(state), Some(s)) => {
+                    // Empties the cache when it cannot measure.
+                    measure_tracked_cached(s, start.clone(), state, &spec.tracked, cache)
                         .ok()
                         .flatten()
-                }),
-                _ => None,
+                }
+                _ => {
+                    cache.clear();
+                    None
+                }
             };
             let first = match short {
                 Some(m) => Ok(m),
@@ -483,6 +553,7 @@ fn measure_curve<'s>(
                     note: format!(
                         "the tracked fit failed ({why}); measured again with the first frame's stages"
                     ),
+                    band: None,
                 },
                 _ => CurveResult {
                     measured: first,
@@ -490,6 +561,7 @@ fn measure_curve<'s>(
                     config: spec.tracked.clone(),
                     started_from: p.stem.clone(),
                     note: String::new(),
+                    band: None,
                 },
             }
         }

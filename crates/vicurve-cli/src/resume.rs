@@ -21,7 +21,7 @@ use crate::job::WidthSpec;
 use serde::Serialize;
 use std::path::Path;
 use vicurve::curve::{SplineCurve, SplineCurveData};
-use vicurve::fit::{Measurement, Outcome, TrackState};
+use vicurve::fit::{Measurement, Outcome, TrackSnapshot, TrackState};
 use vicurve::spline::Basis;
 use vicurve::virtual_image::Profile;
 
@@ -124,6 +124,8 @@ pub struct Recorded {
     /// What the next frame's tracking schedule takes from this one
     /// ([`tracking_state`] of the recorded last stage).
     pub state: Option<TrackState>,
+    /// The band the frame left for the next one (its `sequence.track_band`).
+    pub band: Option<TrackSnapshot>,
 }
 
 /// Read a curve's JSON written by this job (`fingerprint`) for the frame
@@ -149,10 +151,14 @@ pub fn read_recorded(path: &Path, fingerprint: &str, input: &str) -> Option<Reco
             .is_some_and(|a| !a.is_empty());
         TrackState::from_last_stage(profile, elements, outcome, curve.param_length(), vary)
     });
+    // A band that cannot be read back is built anew by the next frame,
+    // which then differs from an uninterrupted run in the last digits.
+    let band = serde_json::from_value(v["sequence"]["track_band"].clone()).ok();
     Some(Recorded {
         good: status == "converged" || status == "iteration_limit",
         curve,
         state,
+        band,
     })
 }
 

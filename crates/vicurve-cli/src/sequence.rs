@@ -27,7 +27,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vicurve::curve::SplineCurve;
-use vicurve::fit::TrackState;
+use vicurve::fit::{TrackSnapshot, TrackState};
 
 /// `DIR/summary.csv`.
 pub const SUMMARY_STEM: &str = "summary";
@@ -115,8 +115,8 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
     for (i, (path, stem)) in job.images.iter().zip(&stems).enumerate() {
         let files = FrameFiles::new(job, stem);
         if done[i] {
-            if let Some((good, states)) = read_done(job, &fingerprint, path, &files) {
-                tracking.update(job, stem, &good, &states);
+            if let Some((good, states, bands)) = read_done(job, &fingerprint, path, &files) {
+                tracking.update(job, stem, &good, &states, &bands, false);
                 lines[i] = old_rows.remove(stem).unwrap_or_default();
                 skipped += 1;
                 continue;
@@ -137,7 +137,7 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
             || next.map(|k| (k, decode_frame(&job.images[k]))),
         );
         prefetched = next_decoded;
-        tracking.update(job, stem, &out.good, &out.states);
+        tracking.update(job, stem, &out.good, &out.states, &out.bands, true);
         lines[i] = out.rows.iter().map(|r| r.to_line()).collect();
         measured += 1;
         for p in &out.problems {
@@ -218,9 +218,13 @@ fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
     out
 }
 
-/// A done frame's good curves and their tracking states, per curve of the
-/// job.
-type DoneCurves = (Vec<Option<SplineCurve>>, Vec<Option<TrackState>>);
+/// A done frame's good curves, their tracking states and the bands they
+/// left, per curve of the job.
+type DoneCurves = (
+    Vec<Option<SplineCurve>>,
+    Vec<Option<TrackState>>,
+    Vec<Option<TrackSnapshot>>,
+);
 
 /// A done frame's curves as written, `None` if any JSON is unusable.
 fn read_done(job: &Job, fingerprint: &str, path: &Path, files: &FrameFiles) -> Option<DoneCurves> {
@@ -230,18 +234,18 @@ fn read_done(job: &Job, fingerprint: &str, path: &Path, files: &FrameFiles) -> O
         .iter()
         .map(|c| read_recorded(&files.json(&c.name), fingerprint, &input))
         .collect::<Option<_>>()?;
-    Some(
-        recorded
-            .into_iter()
-            .map(|r| {
-                if r.good {
-                    (Some(r.curve), r.state)
-                } else {
-                    (None, None)
-                }
-            })
-            .unzip(),
-    )
+    let mut done: DoneCurves = (Vec::new(), Vec::new(), Vec::new());
+    for r in recorded {
+        let (curve, state, band) = if r.good {
+            (Some(r.curve), r.state, r.band)
+        } else {
+            (None, None, None)
+        };
+        done.0.push(curve);
+        done.1.push(state);
+        done.2.push(band);
+    }
+    Some(done)
 }
 
 fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {

@@ -29,7 +29,7 @@
 use std::time::Instant;
 use vicurve::curve::{InitialCurve, SplineCurve};
 use vicurve::fit::{
-    measure, measure_from, measure_tracked_from, parse_stages, FitConfig, TrackState,
+    measure, measure_from, measure_tracked_cached, parse_stages, FitConfig, TrackCache, TrackState,
 };
 use vicurve::interp::{Interpolation, Sampler};
 use vicurve::render::{render, Method, RenderSpec};
@@ -142,6 +142,8 @@ fn main() {
         let mut curve = m0.curve.clone();
         let mut state = TrackState::from_measurement(&m0);
         let mut fallbacks = 0;
+        // What each tracked frame leaves for the next (its band).
+        let mut cache = TrackCache::default();
         for k in 1..=frames {
             let t = Instant::now();
             let img = vicurve::io::load_image(&path(k)).unwrap();
@@ -167,7 +169,8 @@ fn main() {
             let start = SplineCurve::fit(&pts, true, 3, spacing).unwrap();
             let attempt = match (tracked, &state) {
                 (true, Some(st)) => {
-                    measure_tracked_from(&sampler, start.clone(), st, &config).unwrap()
+                    measure_tracked_cached(&sampler, start.clone(), st, &config, &mut cache)
+                        .unwrap()
                 }
                 _ => None,
             };

@@ -320,6 +320,58 @@ impl Correlation {
         }
     }
 
+    /// Pushed profile only: the same band and reference on another image of
+    /// the same size (the next frame of a sequence, see `fit::track`). The
+    /// pixel values at the band pixels are read again; everything that
+    /// depends on the band alone is kept (`M0` and its factor, the levels'
+    /// constant matrices, the light's tilt measured when it was prepared);
+    /// what the previous image left (its noise estimate, its last gray
+    /// levels and residual, a switch to the reference's gradient) is reset,
+    /// so that the system is as [`Correlation::prepare`] made it, apart from
+    /// the tilt.
+    ///
+    /// Errors: [`Error::BandOutsideImage`] when a band pixel has no value
+    /// (an image of another size), [`Error::InvalidParameter`] for a pulled
+    /// profile.
+    pub fn reload(&mut self, sampler: &Sampler) -> Result<()> {
+        let Some(values) = self.pushed.as_mut() else {
+            return Err(Error::invalid(
+                "reloaded system",
+                "only a pushed profile's system reads the image once",
+            ));
+        };
+        let band = &self.band;
+        let missing = values
+            .par_iter_mut()
+            .zip(&band.pos)
+            .map(|(v, &[x, y])| match sampler.pixel(x as usize, y as usize) {
+                Some(f) => {
+                    *v = f;
+                    None
+                }
+                None => Some([x, y]),
+            })
+            .find_first(Option::is_some)
+            .flatten();
+        if let Some([x, y]) = missing {
+            return Err(Error::BandOutsideImage {
+                x,
+                y,
+                half_width: band.half_width(),
+            });
+        }
+        self.noise_var = None;
+        self.levels = None;
+        self.ssr = 0.0;
+        self.displaced_gradient = true;
+        Ok(())
+    }
+
+    /// Whether a robust refit reweighted some band pixel.
+    pub fn reweighted(&self) -> bool {
+        self.robust.iter().any(|&w| w != 1.0)
+    }
+
     /// The light's tilt this system measured or took (`None` without
     /// varying levels or a pushed profile).
     pub fn measured_tilt(&self) -> Option<&MeasuredTilt> {
@@ -789,13 +841,17 @@ impl Correlation {
         let band = &self.band;
         // A regular subsample bounds the cost (the sort) on wide bands; the
         // variance of the estimate is then about 2 / NOISE_PIXELS relative.
-        // Pixels the robust weights rejected (clutter) are left out.
+        // Pixels the robust weights rejected (clutter) are left out, and so
+        // are those out of a band's window (`Band::recentre`): they do not
+        // count in the fit, and with them a tracked frame on a kept band
+        // (wide margin) found varying levels significant on a disc under
+        // even light where a band of its own did not (tests/track.rs).
         let stride = band.len().div_ceil(NOISE_PIXELS).max(1);
         // In parallel; `collect` keeps the pixels' order.
         let mut res: Vec<(f64, f64)> = (0..band.len().div_ceil(stride))
             .into_par_iter()
             .map(|k| k * stride)
-            .filter(|&i| self.robust[i] >= 0.5)
+            .filter(|&i| self.robust[i] >= 0.5 && band.weight[i] > 0.0)
             .filter_map(|i| Some((band.r[i], self.residual(i, lambda, sampler)?)))
             .collect();
         if res.len() < 3 {

@@ -30,7 +30,10 @@ pub use levels::LevelModel;
 pub use result::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
 };
-pub use track::{measure_tracked, measure_tracked_from, TrackState};
+pub use track::{
+    measure_tracked, measure_tracked_cached, measure_tracked_from, TrackCache, TrackSnapshot,
+    TrackState,
+};
 
 use crate::band::Band;
 use crate::curve::{InitialCurve, SplineCurve};
@@ -178,13 +181,18 @@ pub fn measure_from(
 }
 
 /// [`measure_from`]; with `tracked`, the schedule is the tracking one
-/// instead (the pixel-edge stage alone, see [`track`]).
+/// instead (the pixel-edge stage alone, see [`track`]), on the band the
+/// cache keeps when it serves, and the cache updated after it.
 fn run_schedule(
     sampler: &Sampler,
     reference: SplineCurve,
     config: &FitConfig,
-    tracked: Option<TrackState>,
+    tracked: Option<(TrackState, &mut TrackCache)>,
 ) -> Result<Measurement> {
+    let (tracked, mut cache) = match tracked {
+        Some((t, c)) => (Some(t), Some(c)),
+        None => (None, None),
+    };
     config.validate()?;
     if sampler.kind() != config.interpolation {
         return Err(Error::invalid(
@@ -206,24 +214,43 @@ fn run_schedule(
     let min_el = if closed { p + 1 } else { 1 };
 
     let mut current = breaks::prepare(reference, &config.breaks)?;
+    // Tracking: the band the previous frame left, when it serves this one
+    // (see `TrackCache`), and the margin of a new band.
+    let mut reuse = match (tracked, cache.as_deref_mut()) {
+        (Some(t), Some(c)) => c.take_for(&t, config.levels, sampler, config.coords),
+        _ => None,
+    };
+    let track_margin = cache
+        .as_deref()
+        .map_or(track::TRACK_MARGIN, TrackCache::margin);
     // A tracked frame's run does not settle (see `track::TRACK_MARGIN`):
     // its reference, the previous frame's curve, is refitted with control
     // points one element apart first, as a settle's would be. The
     // displacement cannot remove detail finer than its elements, which
     // would otherwise stay in the result and pile up from frame to frame.
-    if let Some(t) = tracked {
-        let stage = t.stage();
-        let n = stage.element_count(current.param_length(), min_el);
-        let basis = breaks::displacement_basis(&current, p, n)?;
-        let spacing = basis.element_length().max(CURVE_SPACING);
-        let clip = Clip {
-            half_width: stage.half_width + track::TRACK_MARGIN,
-            width: sampler.width(),
-            height: sampler.height(),
-        };
-        let zero = vec![0.0; basis.n_functions()];
-        current = displaced(&current, &basis, &zero, spacing, clip)?;
+    // A kept band's reference was.
+    match (tracked, &reuse) {
+        (Some(_), Some(kept)) => current = kept.reference.clone(),
+        (Some(t), None) => {
+            let stage = t.stage();
+            let n = stage.element_count(current.param_length(), min_el);
+            let basis = breaks::displacement_basis(&current, p, n)?;
+            let spacing = basis.element_length().max(CURVE_SPACING);
+            let clip = Clip {
+                half_width: stage.half_width + track_margin,
+                width: sampler.width(),
+                height: sampler.height(),
+            };
+            let zero = vec![0.0; basis.n_functions()];
+            current = displaced(&current, &basis, &zero, spacing, clip)?;
+        }
+        (None, _) => {}
     }
+    // Tracking: the displacement the current band's run started from, and
+    // how far the curve moved on the frame's earlier bands (pixels, the
+    // sum of their largest displacements: a bound).
+    let mut run_start: Option<Vec<f64>> = None;
+    let mut moved_before = 0.0;
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     let mut last: Option<Final> = None;
@@ -291,7 +318,15 @@ fn run_schedule(
             let profile = pushed.unwrap_or(Profile::Paper { kind: config.kind });
             let length = current.param_length();
             let n_elements = fixed_elements.unwrap_or_else(|| stage.element_count(length, min_el));
-            let basis = breaks::displacement_basis(&current, p, n_elements)?;
+            // A kept band serves the frame's first run.
+            let reused = match (iterations, rereferences) {
+                (0, 0) => reuse.take(),
+                _ => None,
+            };
+            let basis = match &reused {
+                Some(kept) => kept.corr.basis.clone(),
+                None => breaks::displacement_basis(&current, p, n_elements)?,
+            };
             let first_band = last.is_none() && iterations == 0;
             // Coarse stages (all but the last) only bring the curve near the
             // edge: half the pixels do that, a quarter in bands of 16 px or
@@ -306,100 +341,117 @@ fn run_schedule(
             // `track::TRACK_MARGIN`); where that band does not fit in the
             // image, the plain one settles as the full schedule does.
             let margin = match (tracked, pushed) {
-                (Some(_), Some(_)) => track::TRACK_MARGIN,
+                (Some(_), Some(_)) => track_margin,
                 _ => 0.0,
             };
-            let plain = || {
-                Band::build_with(
-                    &current,
-                    &basis,
-                    r,
-                    profile,
-                    width,
-                    height,
-                    thin,
-                    config.coords,
-                )
-            };
-            let built = if margin > 0.0 {
-                let coords = config.coords;
-                Band::build_windowed(&current, &basis, r, margin, profile, width, height, coords)
-                    .or_else(|_| plain())
+            let (mut corr, band_pixels, kept_lambda) = if let Some(kept) = reused {
+                let track::Kept {
+                    mut corr, lambda, ..
+                } = *kept;
+                corr.reload(sampler)?;
+                let pixels = corr.band.len();
+                (corr, pixels, Some(lambda))
             } else {
-                plain()
-            };
-            let band = match built {
-                Ok(b) => b,
-                Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
-                    if appended && iterations == 0 {
-                        // The matched band does not fit: keep the result.
-                        skipped.push(format!("R = {r} px (matched to the edge's blur): {e}"));
-                        continue 'stages;
+                let plain = || {
+                    Band::build_with(
+                        &current,
+                        &basis,
+                        r,
+                        profile,
+                        width,
+                        height,
+                        thin,
+                        config.coords,
+                    )
+                };
+                let built = if margin > 0.0 {
+                    let coords = config.coords;
+                    Band::build_windowed(
+                        &current, &basis, r, margin, profile, width, height, coords,
+                    )
+                    .or_else(|_| plain())
+                } else {
+                    plain()
+                };
+                let band = match built {
+                    Ok(b) => b,
+                    Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
+                        if appended && iterations == 0 {
+                            // The matched band does not fit: keep the result.
+                            skipped.push(format!("R = {r} px (matched to the edge's blur): {e}"));
+                            continue 'stages;
+                        }
+                        if first_band && auto && !is_last {
+                            skipped.push(format!("R = {r} px: {e}"));
+                            continue 'stages;
+                        }
+                        if first_band {
+                            return Err(e);
+                        }
+                        if appended {
+                            // An optional refinement: the previous result stands.
+                            skipped.push(format!("R = {r} px (matched to the blur): {e}"));
+                            break 'stages;
+                        }
+                        let (x, y) = match e {
+                            Error::BandOutsideImage { x, y, .. }
+                            | Error::CurveOutsideImage { x, y, .. } => (x, y),
+                            _ => (f64::NAN, f64::NAN),
+                        };
+                        outcome = Outcome::Diverged {
+                            divergence: Divergence::LeftImage { x, y },
+                        };
+                        reports.push(report(
+                            stage,
+                            profile,
+                            &basis,
+                            0,
+                            iterations,
+                            rereferences,
+                            step,
+                            started,
+                            outcome,
+                            std::mem::take(&mut history),
+                        ));
+                        break 'stages;
                     }
-                    if first_band && auto && !is_last {
-                        skipped.push(format!("R = {r} px: {e}"));
-                        continue 'stages;
-                    }
-                    if first_band {
-                        return Err(e);
-                    }
-                    if appended {
-                        // An optional refinement: the previous result stands.
+                    Err(e) => return Err(e),
+                };
+                let band_pixels = band.len();
+                let prepared = Correlation::prepare(
+                    band,
+                    basis.clone(),
+                    sampler,
+                    config.levels,
+                    tilt.as_ref(),
+                );
+                let corr = match prepared {
+                    Ok(c) => c,
+                    Err(e) if first_band => return Err(e),
+                    Err(e) if appended => {
                         skipped.push(format!("R = {r} px (matched to the blur): {e}"));
                         break 'stages;
                     }
-                    let (x, y) = match e {
-                        Error::BandOutsideImage { x, y, .. }
-                        | Error::CurveOutsideImage { x, y, .. } => (x, y),
-                        _ => (f64::NAN, f64::NAN),
-                    };
-                    outcome = Outcome::Diverged {
-                        divergence: Divergence::LeftImage { x, y },
-                    };
-                    reports.push(report(
-                        stage,
-                        profile,
-                        &basis,
-                        0,
-                        iterations,
-                        rereferences,
-                        step,
-                        started,
-                        outcome,
-                        std::mem::take(&mut history),
-                    ));
-                    break 'stages;
-                }
-                Err(e) => return Err(e),
-            };
-            let band_pixels = band.len();
-            let prepared =
-                Correlation::prepare(band, basis.clone(), sampler, config.levels, tilt.as_ref());
-            let mut corr = match prepared {
-                Ok(c) => c,
-                Err(e) if first_band => return Err(e),
-                Err(e) if appended => {
-                    skipped.push(format!("R = {r} px (matched to the blur): {e}"));
-                    break 'stages;
-                }
-                Err(_) => {
-                    outcome = Outcome::Diverged {
-                        divergence: Divergence::Degenerate,
-                    };
-                    reports.push(report(
-                        stage,
-                        profile,
-                        &basis,
-                        band_pixels,
-                        iterations,
-                        rereferences,
-                        step,
-                        started,
-                        outcome,
-                        std::mem::take(&mut history),
-                    ));
-                    break 'stages;
-                }
+                    Err(_) => {
+                        outcome = Outcome::Diverged {
+                            divergence: Divergence::Degenerate,
+                        };
+                        reports.push(report(
+                            stage,
+                            profile,
+                            &basis,
+                            band_pixels,
+                            iterations,
+                            rereferences,
+                            step,
+                            started,
+                            outcome,
+                            std::mem::take(&mut history),
+                        ));
+                        break 'stages;
+                    }
+                };
+                (corr, band_pixels, None)
             };
             if corr.noise_var.is_none() {
                 corr.noise_var = stage_noise;
@@ -416,7 +468,10 @@ fn run_schedule(
                 corr.use_reference_gradient();
             }
             tilt = corr.measured_tilt().cloned();
-            let mut lambda = vec![0.0; corr.n_unknowns()];
+            let mut lambda = kept_lambda.unwrap_or_else(|| vec![0.0; corr.n_unknowns()]);
+            if tracked.is_some() {
+                run_start = Some(lambda.clone());
+            }
             let budget = config.max_iterations.saturating_sub(iterations);
             // A band with a margin needs no settle (see `track::TRACK_MARGIN`).
             let windowed = corr.band.margin() > 0.0;
@@ -470,6 +525,7 @@ fn run_schedule(
                     let spacing = reference_spacing(&corr.basis);
                     current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
                     rereferences += 1;
+                    moved_before += largest_change(&lambda, run_start.as_deref());
                 }
                 Some(Outcome::Diverged { divergence }) if appended => {
                     skipped.push(format!("R = {r} px (matched to the blur): {divergence}"));
@@ -503,7 +559,15 @@ fn run_schedule(
                         && !corr.levels_significant(&lambda, sampler)
                     {
                         config.levels = LevelModel::Global;
-                        let band = corr.band.clone();
+                        // A band with a margin counts the pixels around
+                        // the reference again, as when it was built: its
+                        // `M0` is the one a fresh band's would be (a
+                        // tracked sequence may build it again, see
+                        // `TrackCache`).
+                        let mut band = corr.band.clone();
+                        if band.margin() > 0.0 {
+                            band.recentre(&basis, &vec![0.0; basis.n_functions()]);
+                        }
                         if let Ok(mut global) =
                             Correlation::prepare(band, basis.clone(), sampler, config.levels, None)
                         {
@@ -614,6 +678,7 @@ fn run_schedule(
                     if again || settle {
                         let spacing = corr.basis.element_length().max(CURVE_SPACING);
                         current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
+                        moved_before += largest_change(&lambda, run_start.as_deref());
                         settles += 1;
                         rereferences += 1;
                         continue;
@@ -746,6 +811,28 @@ fn run_schedule(
         .map(|e| e.sigma);
     let (curve, curve_fit_error, samples, levels) =
         fin.samples(config.sample_spacing, p.max(3), blur)?;
+    if let Some(cache) = cache {
+        // The frame's last band, kept for the next frame (see
+        // `TrackCache`), with how far the curve moved; not after a robust
+        // reweighting (the weights would carry over).
+        let motion = run_start
+            .as_deref()
+            .map(|start| moved_before + largest_change(&fin.lambda, Some(start)));
+        let keep = outcome == Outcome::Converged
+            && motion.is_some()
+            && fin.corr.band.margin() > 0.0
+            && !fin.corr.reweighted();
+        let kept = keep.then(|| {
+            Box::new(track::Kept {
+                reference: fin.reference,
+                corr: fin.corr,
+                lambda: fin.lambda,
+                levels: config.levels,
+                size: (width, height),
+            })
+        });
+        cache.update(kept, motion);
+    }
     Ok(Measurement {
         outcome,
         curve,
@@ -757,6 +844,19 @@ fn run_schedule(
         blur_corrected: blur.is_some() || pixel_edge_result,
         levels,
     })
+}
+
+/// The largest change of the coefficients from `start` (from 0 without
+/// one), pixels: a bound on that of the displacement (the B-splines are a
+/// partition of unity).
+fn largest_change(lambda: &[f64], start: Option<&[f64]>) -> f64 {
+    match start {
+        Some(start) => lambda
+            .iter()
+            .zip(start)
+            .fold(0.0, |m: f64, (l, s)| m.max((l - s).abs())),
+        None => lambda.iter().fold(0.0, |m: f64, l| m.max(l.abs())),
+    }
 }
 
 /// How a run of Gauss–Newton iterations on one reference ended.
@@ -1250,7 +1350,7 @@ impl Final {
         }
         // Robust weights binned by the reference parameter, 1 px bins (none
         // when no pixel was reweighted: the weight is 1 everywhere).
-        let reweighted = self.corr.robust.iter().any(|&w| w != 1.0);
+        let reweighted = self.corr.reweighted();
         let nbins = if reweighted { l.ceil() as usize + 1 } else { 0 };
         let mut bins = vec![(0.0, 0.0); nbins];
         if reweighted {

@@ -18,7 +18,10 @@
 //! curve refitted with control points one element apart (as a settle's
 //! reference is). A frame that moves more than the margin re-references
 //! on its way; where the band with its margin does not fit in the image,
-//! the stage settles as the full schedule's does.
+//! the stage settles as the full schedule's does. In a sequence, a frame
+//! may also measure on the band the previous frame left, when the curve
+//! stays within its margin ([`TrackCache`], [`measure_tracked_cached`]): no
+//! band and no system to prepare.
 //! Within a frame the blur is refitted until a refit confirms it (the full
 //! schedule refits it after every settling run), and on a narrower bracket
 //! than the full schedule's (`refit_blur`). When the previous frame
@@ -36,6 +39,11 @@
 //! When the tracking schedule cannot measure the frame (the band leaves the
 //! image, no contrast, no convergence), the caller measures it with the
 //! full schedule ([`measure_tracked`] does it itself).
+
+mod cache;
+
+pub(super) use cache::Kept;
+pub use cache::{TrackCache, TrackSnapshot};
 
 use super::correlation::Correlation;
 use super::{measure_from, pixel_edge_band, run_schedule, Elements, FitConfig, Measurement, Stage};
@@ -150,6 +158,35 @@ pub fn measure_tracked_from(
     state: &TrackState,
     config: &FitConfig,
 ) -> Result<Option<Measurement>> {
+    measure_tracked_cached(sampler, start, state, config, &mut TrackCache::default())
+}
+
+/// [`measure_tracked_from`] for a frame of a sequence whose previous frame
+/// left `cache` (see [`TrackCache`]): measured on the kept band when it
+/// serves, and the cache updated for the next frame (emptied when the
+/// frame is not measured by the tracking schedule: `Ok(None)`, an error).
+/// `start` is then not used.
+pub fn measure_tracked_cached(
+    sampler: &Sampler,
+    start: SplineCurve,
+    state: &TrackState,
+    config: &FitConfig,
+    cache: &mut TrackCache,
+) -> Result<Option<Measurement>> {
+    let m = measure_tracked_inner(sampler, start, state, config, cache);
+    if !matches!(m, Ok(Some(_))) {
+        cache.clear();
+    }
+    m
+}
+
+fn measure_tracked_inner(
+    sampler: &Sampler,
+    start: SplineCurve,
+    state: &TrackState,
+    config: &FitConfig,
+    cache: &mut TrackCache,
+) -> Result<Option<Measurement>> {
     config.validate()?;
     if config.kind != Kind::Silhouette || !config.blur_correction || !state.usable() {
         return Ok(None);
@@ -163,7 +200,7 @@ pub fn measure_tracked_from(
     if state.global_levels {
         config.levels = LevelModel::Global;
     }
-    let m = match run_schedule(sampler, start, &config, Some(*state)) {
+    let m = match run_schedule(sampler, start, &config, Some((*state, cache))) {
         Ok(m) => m,
         Err(_) => return Ok(None),
     };
