@@ -246,11 +246,12 @@ fn run_schedule(
         }
         (None, _) => {}
     }
-    // Tracking: the displacement the current band's run started from, and
-    // how far the curve moved on the frame's earlier bands (pixels, the
-    // sum of their largest displacements: a bound).
+    // Tracking: where the previous frame's curve is on the current band
+    // (its displacement), and how far the curve moved on the frame's
+    // earlier bands (pixels, the sum of their largest displacements: a
+    // bound; none when the frame measured on one band).
     let mut run_start: Option<Vec<f64>> = None;
-    let mut moved_before = 0.0;
+    let mut moved_before: Option<f64> = None;
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     let mut last: Option<Final> = None;
@@ -346,11 +347,14 @@ fn run_schedule(
             };
             let (mut corr, band_pixels, kept_lambda) = if let Some(kept) = reused {
                 let track::Kept {
-                    mut corr, lambda, ..
+                    mut corr,
+                    lambda,
+                    velocity,
+                    ..
                 } = *kept;
                 corr.reload(sampler)?;
                 let pixels = corr.band.len();
-                (corr, pixels, Some(lambda))
+                (corr, pixels, Some((lambda, velocity)))
             } else {
                 let plain = || {
                     Band::build_with(
@@ -468,8 +472,16 @@ fn run_schedule(
                 corr.use_reference_gradient();
             }
             tilt = corr.measured_tilt().cloned();
-            let mut lambda = kept_lambda.unwrap_or_else(|| vec![0.0; corr.n_unknowns()]);
-            if tracked.is_some() {
+            let mut lambda = vec![0.0; corr.n_unknowns()];
+            if let Some((kept, velocity)) = kept_lambda {
+                // The previous frame's curve, moved on as it moved last
+                // (see `TrackCache`).
+                lambda.clone_from(&kept);
+                for (l, v) in lambda.iter_mut().zip(velocity.iter().flatten()) {
+                    *l += v;
+                }
+                run_start = Some(kept);
+            } else if tracked.is_some() {
                 run_start = Some(lambda.clone());
             }
             let budget = config.max_iterations.saturating_sub(iterations);
@@ -525,7 +537,8 @@ fn run_schedule(
                     let spacing = reference_spacing(&corr.basis);
                     current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
                     rereferences += 1;
-                    moved_before += largest_change(&lambda, run_start.as_deref());
+                    let moved = largest_change(&lambda, run_start.as_deref());
+                    moved_before = Some(moved_before.unwrap_or(0.0) + moved);
                 }
                 Some(Outcome::Diverged { divergence }) if appended => {
                     skipped.push(format!("R = {r} px (matched to the blur): {divergence}"));
@@ -678,7 +691,8 @@ fn run_schedule(
                     if again || settle {
                         let spacing = corr.basis.element_length().max(CURVE_SPACING);
                         current = displaced(&current, &corr.basis, &lambda, spacing, clip)?;
-                        moved_before += largest_change(&lambda, run_start.as_deref());
+                        let moved = largest_change(&lambda, run_start.as_deref());
+                        moved_before = Some(moved_before.unwrap_or(0.0) + moved);
                         settles += 1;
                         rereferences += 1;
                         continue;
@@ -817,7 +831,12 @@ fn run_schedule(
         // reweighting (the weights would carry over).
         let motion = run_start
             .as_deref()
-            .map(|start| moved_before + largest_change(&fin.lambda, Some(start)));
+            .map(|start| moved_before.unwrap_or(0.0) + largest_change(&fin.lambda, Some(start)));
+        // How the curve moved on its one band, if it did on one.
+        let velocity = match (&run_start, moved_before) {
+            (Some(start), None) => Some(fin.lambda.iter().zip(start).map(|(l, s)| l - s).collect()),
+            _ => None,
+        };
         let keep = outcome == Outcome::Converged
             && motion.is_some()
             && fin.corr.band.margin() > 0.0
@@ -827,6 +846,7 @@ fn run_schedule(
                 reference: fin.reference,
                 corr: fin.corr,
                 lambda: fin.lambda,
+                velocity,
                 levels: config.levels,
                 size: (width, height),
             })

@@ -13,7 +13,10 @@
 //! margin. A new band's margin is sized from that motion
 //! ([`REUSE_MOTIONS`] times it, between `TRACK_MARGIN` and
 //! [`MAX_TRACK_MARGIN`]), so that a curve moving steadily is measured on
-//! each band for up to four frames; a curve that moves more than half
+//! each band for up to four frames; a frame on a kept band starts from the
+//! kept displacement moved on as the curve moved over the last frame (a
+//! steady motion then needs fewer iterations); a curve that moves more
+//! than half
 //! the largest margin per frame gets the smallest (no frame could reuse
 //! its band). The light's tilt measured on the band's
 //! first frame serves its later ones.
@@ -78,6 +81,10 @@ pub(crate) struct Kept {
     pub reference: SplineCurve,
     pub corr: Correlation,
     pub lambda: Vec<f64>,
+    /// How the displacement changed over the last frame, when that frame
+    /// measured on this band alone: the next frame starts from `lambda`
+    /// plus this.
+    pub velocity: Option<Vec<f64>>,
     /// The level model the system was prepared with.
     pub levels: LevelModel,
     /// The image size the band was built in, pixels.
@@ -111,6 +118,8 @@ struct BandRecord {
     displacement_degree: usize,
     displacement_elements: usize,
     lambda: Vec<f64>,
+    #[serde(default)]
+    velocity: Option<Vec<f64>>,
     /// The band: half-width and margin, pixels, and the pixel edge's blur.
     half_width: f64,
     margin: f64,
@@ -141,6 +150,7 @@ impl BandRecord {
             displacement_degree: kept.corr.basis.degree(),
             displacement_elements: kept.corr.basis.n_elements(),
             lambda: kept.lambda.clone(),
+            velocity: kept.velocity.clone(),
             half_width: kept.corr.band.half_width(),
             margin: kept.corr.band.margin(),
             blur,
@@ -182,6 +192,7 @@ impl BandRecord {
             reference,
             corr,
             lambda: self.lambda,
+            velocity: self.velocity,
             levels: self.levels,
             size,
         })
