@@ -475,7 +475,10 @@ fn run_schedule(
             let mut lambda = vec![0.0; corr.n_unknowns()];
             if let Some((kept, velocity)) = kept_lambda {
                 // The previous frame's curve, moved on as it moved last
-                // (see `TrackCache`).
+                // (see `TrackCache`). The blur stands as the band's first
+                // frame fitted it: a sequence's blur changes slowly, and
+                // the next band (a few frames on) fits it again.
+                blur_confirmed = true;
                 lambda.clone_from(&kept);
                 for (l, v) in lambda.iter_mut().zip(velocity.iter().flatten()) {
                     *l += v;
