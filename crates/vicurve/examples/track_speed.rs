@@ -11,7 +11,8 @@
 //! frame, blur 1, noise 1 %) are rendered once into the temporary folder.
 //! For each schedule (`tracked`, the tracking schedule that `track` uses by
 //! default: the pixel-edge stage alone from the previous frame's blur and
-//! elements, [`vicurve::fit::measure_tracked_from`], on an image prepared
+//! elements, [`vicurve::fit::measure_tracked_cached`] with the band the
+//! previous frame left when it serves, on an image prepared
 //! without interpolation, falling back to the default schedule when it
 //! cannot measure; `default`, the full default schedule; or `R:N,...` as
 //! `--stages`; optionally followed by `/bilinear` or `/keys` for another

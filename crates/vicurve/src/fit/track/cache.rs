@@ -19,7 +19,9 @@
 //! than half
 //! the largest margin per frame gets the smallest (no frame could reuse
 //! its band). The light's tilt measured on the band's
-//! first frame serves its later ones.
+//! first frame, and the blur it fitted, serve its later ones (a
+//! sequence's light and focus change slowly; the next band measures them
+//! again).
 //!
 //! # Resuming
 //! A sequence that is stopped and resumed must give the same results to
@@ -56,8 +58,14 @@ pub(super) const REUSE_MOTIONS: f64 = 4.1;
 /// iteration).
 pub(super) const MAX_TRACK_MARGIN: f64 = 2.5;
 
-/// What a frame of a sequence leaves for the next one of the same curve;
-/// see the [module docs](self).
+/// What a frame of a sequence leaves for the next one of the same curve:
+/// the band it measured on, with its prepared system and displacement.
+/// The next frame measures on that band, when the curve stays within its
+/// margin, instead of building one (the tracked band counts the pixels
+/// around the displaced curve, so the result hardly depends on its
+/// reference). [`TrackCache::snapshot`] writes it down and
+/// [`TrackCache::from_snapshot`] reads it back, so that a resumed
+/// sequence gives the same numbers as an uninterrupted one.
 ///
 /// A cache belongs to one curve of one sequence, used in frame order
 /// ([`super::measure_tracked_cached`]); an empty one
@@ -91,8 +99,7 @@ pub(crate) struct Kept {
     pub size: (usize, usize),
 }
 
-/// What [`TrackCache`] holds, written down: see the module docs
-/// ("Resuming"). Serialisable (JSON keeps every bit of its numbers), to be
+/// What [`TrackCache`] holds, written down. Serialisable (JSON keeps every bit of its numbers), to be
 /// read back by [`TrackCache::from_snapshot`]; its fields are not an
 /// interface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -200,8 +207,7 @@ impl BandRecord {
 }
 
 impl TrackCache {
-    /// The cache as written down (see the module docs): `None` when it
-    /// holds nothing.
+    /// The cache as written down: `None` when it holds nothing.
     pub fn snapshot(&self) -> Option<TrackSnapshot> {
         let band = match &self.held {
             Some(Held::Built(kept)) => BandRecord::of(kept),
@@ -234,7 +240,7 @@ impl TrackCache {
         self.held = None;
     }
 
-    /// The margin of a new band, pixels (see the module docs).
+    /// The margin of a new band, pixels (see the module's docs).
     pub(crate) fn margin(&self) -> f64 {
         let Some(m) = self.motion else {
             return super::TRACK_MARGIN;
