@@ -165,7 +165,7 @@ pub fn measure_tracked_from(
 /// left `cache` (see [`TrackCache`]): measured on the kept band when it
 /// serves, and the cache updated for the next frame (emptied when the
 /// frame is not measured by the tracking schedule: `Ok(None)`, an error).
-/// `start` is then not used.
+/// `start` is not used when the kept band serves.
 pub fn measure_tracked_cached(
     sampler: &Sampler,
     start: SplineCurve,
