@@ -89,7 +89,7 @@ fn a_kept_band_serves_the_next_frames_and_survives_being_written() {
             .unwrap()
             .expect("tracked");
             // A frame on a kept band builds none: its one stage has the
-            // kept band's pixel count and re-references nothing.
+            // kept band's pixel count (a new band's differs).
             if held
                 && m.stages[0].band_pixels
                     == out

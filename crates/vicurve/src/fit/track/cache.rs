@@ -13,15 +13,13 @@
 //! margin. A new band's margin is sized from that motion
 //! ([`REUSE_MOTIONS`] times it, between `TRACK_MARGIN` and
 //! [`MAX_TRACK_MARGIN`]), so that a curve moving steadily is measured on
-//! each band for up to four frames; a frame on a kept band starts from the
-//! kept displacement moved on as the curve moved over the last frame (a
-//! steady motion then needs fewer iterations); a curve that moves more
-//! than half
-//! the largest margin per frame gets the smallest (no frame could reuse
-//! its band). The light's tilt measured on the band's
-//! first frame, and the blur it fitted, serve its later ones (a
-//! sequence's light and focus change slowly; the next band measures them
-//! again).
+//! each band for up to four frames; a curve that moves more than half the
+//! largest margin per frame gets the smallest (no frame could reuse its
+//! band). A frame on a kept band starts from the kept displacement moved
+//! on as the curve moved over the last frame (a steady motion then needs
+//! fewer iterations). The light's tilt measured on the band's first
+//! frame, and the blur it fitted, serve its later ones (a sequence's light
+//! and focus change slowly; the next band measures them again).
 //!
 //! # Resuming
 //! A sequence that is stopped and resumed must give the same results to
@@ -50,8 +48,10 @@ use serde::{Deserialize, Serialize};
 /// A new band's margin is this many times the last frame's motion (see
 /// the module docs): a curve moving steadily stays within it for four
 /// frames. Measured on the `track_speed` example's star (40 frames, blur
-/// 1 px), frames per second in turns: 2.1 times (two frames per band)
-/// 83-92, 3.1 times 93-111, 4.1 times 100-118, one band per frame 68-75.
+/// 1 px), frames per second, each in turns with another: 2.1 times (two
+/// frames per band) 83-92 against 68-75 with a band per frame; 3.1 times
+/// 93-111 against 78-83 with a band per frame; 4.1 times 100-118 against
+/// 93-111 for 3.1.
 pub(super) const REUSE_MOTIONS: f64 = 4.1;
 /// Largest margin of a tracked band, pixels: a curve moving faster gets a
 /// band of its own more often (a wider margin costs pixels in every
@@ -73,8 +73,9 @@ pub(super) const MAX_TRACK_MARGIN: f64 = 2.5;
 #[derive(Default)]
 pub struct TrackCache {
     held: Option<Held>,
-    /// The largest displacement of the last frame measured on its first
-    /// band, from its start, pixels.
+    /// How far the curve moved over the last tracked frame, pixels (the
+    /// largest change of the displacement; summed over its bands when it
+    /// re-referenced: a bound).
     motion: Option<f64>,
 }
 
@@ -99,9 +100,9 @@ pub(crate) struct Kept {
     pub size: (usize, usize),
 }
 
-/// What [`TrackCache`] holds, written down. Serialisable (JSON keeps every bit of its numbers), to be
-/// read back by [`TrackCache::from_snapshot`]; its fields are not an
-/// interface.
+/// What [`TrackCache`] holds, written down. Serialisable (JSON keeps
+/// every bit of its numbers), to be read back by
+/// [`TrackCache::from_snapshot`]; its fields are not an interface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrackSnapshot {
     /// The last frame's motion, pixels.
@@ -125,6 +126,7 @@ struct BandRecord {
     displacement_degree: usize,
     displacement_elements: usize,
     lambda: Vec<f64>,
+    /// The displacement's change over the last frame (see `Kept`).
     #[serde(default)]
     velocity: Option<Vec<f64>>,
     /// The band: half-width and margin, pixels, and the pixel edge's blur.
