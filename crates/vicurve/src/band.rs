@@ -275,13 +275,13 @@ impl Band {
             band.gamma.push(c.gamma);
             band.dgamma.push(c.dgamma);
             band.full_weight.push(c.weight);
+            band.weight.push(c.weight);
             band.curvature.push(c.curvature);
-            // With a margin, the pixels within `half_width` of the
-            // reference count until the first `recentre`.
-            let counts = c.r.abs() < half_width;
-            band.weight.push(if counts { c.weight } else { 0.0 });
-            band.inside += usize::from(counts);
         }
+        band.inside = band.len();
+        // With a margin, the pixels within `half_width` of the reference
+        // count until the first `recentre`.
+        band.window_at_reference();
         Ok(band)
     }
 
@@ -567,6 +567,24 @@ impl Band {
         } else {
             self.weight.clone_from(&self.full_weight);
         }
+    }
+
+    /// Window a band with a margin on its reference (`U = 0`, as
+    /// [`Band::recentre`] with a zero displacement, without evaluating
+    /// it): the window it is built with, and the one a system's constant
+    /// matrix is assembled over. Without a margin, nothing changes.
+    pub(crate) fn window_at_reference(&mut self) {
+        if self.margin == 0.0 {
+            return;
+        }
+        let h = self.half_width;
+        let mut inside = 0;
+        for ((w, full), r) in self.weight.iter_mut().zip(&self.full_weight).zip(&self.r) {
+            let counts = r.abs() < h;
+            *w = if counts { *full } else { 0.0 };
+            inside += usize::from(counts);
+        }
+        self.inside = inside;
     }
 
     /// Window a band with a margin on the curve displaced by `lambda`

@@ -182,7 +182,14 @@ impl Correlation {
     /// with gray levels as `levels` asks (the global pair when the curve is
     /// too short for varying ones, or they cannot be told apart from the
     /// displacement).
-    pub fn new(band: Band, basis: Basis, levels: LevelModel) -> Result<Self> {
+    pub fn new(mut band: Band, basis: Basis, levels: LevelModel) -> Result<Self> {
+        // A band with a margin: `M0` (and everything constant) is that of
+        // the pixels around the reference, whatever window the band was
+        // left with (a robust reweighting's, a finished run's), so that a
+        // system is the same however its band got here (a tracked
+        // sequence may build it again, see `fit::track`). The iterations
+        // window it on the displaced curve.
+        band.window_at_reference();
         let n = basis.n_functions();
         let p = basis.degree();
         if band.len() < 2 * n + 2 {

@@ -575,15 +575,7 @@ fn run_schedule(
                         && !corr.levels_significant(&lambda, sampler)
                     {
                         config.levels = LevelModel::Global;
-                        // A band with a margin counts the pixels around
-                        // the reference again, as when it was built: its
-                        // `M0` is the one a fresh band's would be (a
-                        // tracked sequence may build it again, see
-                        // `TrackCache`).
-                        let mut band = corr.band.clone();
-                        if band.margin() > 0.0 {
-                            band.recentre(&basis, &vec![0.0; basis.n_functions()]);
-                        }
+                        let band = corr.band.clone();
                         if let Ok(mut global) =
                             Correlation::prepare(band, basis.clone(), sampler, config.levels, None)
                         {
