@@ -34,7 +34,8 @@ use vicurve::Image;
 
 /// Spacing of the points that stand for the previous curve in a tracked
 /// frame's `initial_curve` record, px (the fit itself starts from the
-/// previous B-spline, smoothed: see [`tracked_start`]).
+/// previous B-spline: as it is for the tracking schedule, which refits it
+/// itself, smoothed for the job's stages, see [`tracked_start`]).
 const RECORD_SPACING: f64 = 2.0;
 
 /// Control-point spacing of a tracked frame's start, px (at most; at least
@@ -506,25 +507,14 @@ fn measure_curve_with<'s>(
                 points: record_points(&p.curve),
                 closed: p.curve.is_closed(),
             };
-            let start = match tracked_start(&p.curve) {
-                Ok(c) => c,
-                Err(e) => {
-                    cache.clear();
-                    return CurveResult {
-                        measured: Err(e),
-                        init,
-                        config: spec.tracked.clone(),
-                        started_from: p.stem.clone(),
-                        note: String::new(),
-                        band: None,
-                    };
-                }
-            };
+            // The tracking schedule takes the previous curve as it is (it
+            // refits it with control points one element apart itself); the
+            // stages of the job, the smoothed start.
             let plain = sampler(Interpolation::Bilinear);
             let short = match (spec.tracking_schedule, &p.state, plain) {
                 (true, Some(state), Some(s)) => {
                     // Empties the cache when it cannot measure.
-                    measure_tracked_cached(s, start.clone(), state, &spec.tracked, cache)
+                    measure_tracked_cached(s, p.curve.clone(), state, &spec.tracked, cache)
                         .ok()
                         .flatten()
                 }
@@ -533,10 +523,22 @@ fn measure_curve_with<'s>(
                     None
                 }
             };
-            let first = match short {
-                Some(m) => Ok(m),
-                None => run(start.clone(), &spec.tracked),
+            let tracked_result = |measured| CurveResult {
+                measured,
+                init: init.clone(),
+                config: spec.tracked.clone(),
+                started_from: p.stem.clone(),
+                note: String::new(),
+                band: None,
             };
+            if let Some(m) = short {
+                return tracked_result(Ok(m));
+            }
+            let start = match tracked_start(&p.curve) {
+                Ok(c) => c,
+                Err(e) => return tracked_result(Err(e)),
+            };
+            let first = run(start.clone(), &spec.tracked);
             let failed = match &first {
                 Err(e) => Some(e.clone()),
                 Ok(m) => match m.outcome {
@@ -555,21 +557,15 @@ fn measure_curve_with<'s>(
                     ),
                     band: None,
                 },
-                _ => CurveResult {
-                    measured: first,
-                    init,
-                    config: spec.tracked.clone(),
-                    started_from: p.stem.clone(),
-                    note: String::new(),
-                    band: None,
-                },
+                _ => tracked_result(first),
             }
         }
     }
 }
 
-/// The start of a tracked frame: the previous curve refitted with control
-/// points [`START_SPACING`] apart. The measured curve has control points 2 px
+/// The start of a tracked frame measured with the job's stages (the
+/// tracking schedule refits its start itself): the previous curve refitted
+/// with control points [`START_SPACING`] apart. The measured curve has control points 2 px
 /// apart and carries the previous frame's noise at that scale; a fit whose
 /// displacement has longer elements (as a schedule without coarse stages
 /// has) cannot remove it, so it would pass on to the next frame and grow:

@@ -18,7 +18,7 @@
 //! `--stages`; optionally followed by `/bilinear` or `/keys` for another
 //! interpolation than the cubic B-spline; default list: `tracked default
 //! default/bilinear 2:auto 2:40px 2:40px/bilinear`) the frames are tracked
-//! from the previous curve smoothed as `track` does it, and timed: decode,
+//! from the previous curve as `track` does it, and timed: decode,
 //! preparation (the cubic prefilter, or the plain copy of the tracking
 //! schedule), the fit; frames per second with and without the decode, and
 //! the largest distance to the exact star over all samples of all frames.
@@ -158,19 +158,23 @@ fn main() {
             let sampler = Sampler::new(&img, kind);
             prepare += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            // The start as `vicurve track` makes it: the previous curve
-            // refitted with control points 10 px apart.
-            let n = (curve.param_length() / 0.5).ceil() as usize;
-            let pts: Vec<[f64; 2]> = curve
-                .sample_params(n)
-                .into_iter()
-                .map(|u| curve.point(u))
-                .collect();
-            let spacing = (curve.param_length() / 16.0).clamp(2.0, 10.0);
-            let start = SplineCurve::fit(&pts, true, 3, spacing).unwrap();
+            // The start as `vicurve track` makes it: the tracking schedule
+            // takes the previous curve as it is (it refits it itself), the
+            // others the previous curve refitted with control points 10 px
+            // apart.
+            let smoothed = |curve: &SplineCurve| {
+                let n = (curve.param_length() / 0.5).ceil() as usize;
+                let pts: Vec<[f64; 2]> = curve
+                    .sample_params(n)
+                    .into_iter()
+                    .map(|u| curve.point(u))
+                    .collect();
+                let spacing = (curve.param_length() / 16.0).clamp(2.0, 10.0);
+                SplineCurve::fit(&pts, true, 3, spacing).unwrap()
+            };
             let attempt = match (tracked, &state) {
                 (true, Some(st)) => {
-                    measure_tracked_cached(&sampler, start.clone(), st, &config, &mut cache)
+                    measure_tracked_cached(&sampler, curve.clone(), st, &config, &mut cache)
                         .unwrap()
                 }
                 _ => None,
@@ -180,9 +184,9 @@ fn main() {
                 None if kind != config.interpolation => {
                     fallbacks += 1;
                     let full = Sampler::new(&img, config.interpolation);
-                    measure_from(&full, start, &config).unwrap()
+                    measure_from(&full, smoothed(&curve), &config).unwrap()
                 }
-                None => measure_from(&sampler, start, &config).unwrap(),
+                None => measure_from(&sampler, smoothed(&curve), &config).unwrap(),
             };
             fit += t.elapsed().as_secs_f64();
             iterations += m.iterations();

@@ -138,7 +138,8 @@ impl TrackState {
 }
 
 /// Measure a frame with the tracking schedule (module docs), from `start`
-/// (the previous frame's curve, usually smoothed) and the previous frame's
+/// (the previous frame's curve, as it is: the schedule refits it with
+/// control points one element apart) and the previous frame's
 /// `state`. `sampler` may be of any interpolation (only pixel-centre values
 /// are read); `config` gives everything but the stages (its `stages` are
 /// ignored).
