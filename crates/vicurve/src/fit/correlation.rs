@@ -175,6 +175,13 @@ pub(crate) struct Correlation {
     /// at `r - U` (the default, see the module docs) or at `r`
     /// ([`Self::use_reference_gradient`]).
     displaced_gradient: bool,
+    /// The slowest contraction its runs have shown: the largest ratio of
+    /// a step to the one before it in the same run (`None` before a run's
+    /// second step). A property of the system (`M0` against the image's
+    /// own curvature of the residual), which stays as long as `M0` and
+    /// the gradient do: a kept band's next frames may rely on it
+    /// (`fit::error_left`).
+    contraction: Option<f64>,
 }
 
 impl Correlation {
@@ -304,6 +311,7 @@ impl Correlation {
             noise_var: None,
             inverse_band: OnceLock::new(),
             displaced_gradient: true,
+            contraction: None,
         })
     }
 
@@ -442,6 +450,22 @@ impl Correlation {
     /// settle brings to the displaced one's.
     pub fn use_reference_gradient(&mut self) {
         self.displaced_gradient = false;
+        // Another iteration: what the old one showed does not carry over.
+        self.contraction = None;
+    }
+
+    /// The slowest contraction the system's runs have shown (the largest
+    /// ratio of successive steps), if any.
+    pub fn contraction(&self) -> Option<f64> {
+        self.contraction
+    }
+
+    /// Record the ratio of a step to the one before it in the same run
+    /// (see [`Self::contraction`]); also to restore a written one.
+    pub fn observe_contraction(&mut self, ratio: f64) {
+        if ratio.is_finite() {
+            self.contraction = Some(self.contraction.map_or(ratio, |q| q.max(ratio)));
+        }
     }
 
     /// Whether the gradient takes the profile's derivative at `r - U`.

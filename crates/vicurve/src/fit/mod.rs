@@ -923,8 +923,10 @@ fn iterate_to_end(
     let mut relax = Relaxation::new(lambda.len());
     let cap = config.max_step_fraction * r;
     let mut used = 0;
-    // The two raw steps before this one (pixels), for `error_left`.
+    // The two raw steps before this one (pixels), and the contraction the
+    // system showed on earlier runs, for `error_left`.
     let mut previous_steps = [f64::INFINITY; 2];
+    let mut known = corr.contraction();
     loop {
         if used >= budget {
             return (Run::IterationLimit, used);
@@ -932,6 +934,7 @@ fn iterate_to_end(
         if used == DISPLACED_GRADIENT_ITERATIONS && corr.displaced_gradient() {
             corr.use_reference_gradient();
             relax = Relaxation::new(lambda.len());
+            known = None;
         }
         let s = match corr.iterate(lambda, sampler, config.polarity) {
             Ok(s) => s,
@@ -964,7 +967,11 @@ fn iterate_to_end(
         for (l, d) in lambda.iter_mut().zip(&corr.delta) {
             *l += scale * d;
         }
-        if s.max_step < tolerance || error_left(s.max_step, previous_steps) < tolerance {
+        if previous_steps[1].is_finite() {
+            corr.observe_contraction(s.max_step / previous_steps[1]);
+        }
+        let left = error_left(s.max_step, previous_steps, known);
+        if s.max_step < tolerance || left < tolerance {
             return (Run::Converged, used);
         }
         previous_steps = [previous_steps[1], s.max_step];
@@ -975,18 +982,31 @@ fn iterate_to_end(
 }
 
 /// The error (pixels) that remains once a step of `step` is applied, the
-/// two steps before it being `previous` (older first): Gauss–Newton with a
-/// constant matrix contracts linearly, and with `q` the larger ratio of
-/// the last three steps the steps still to come add up to about `step q /
-/// (1 - q)`; taken twice for safety, and only once three steps show a
-/// good contraction (`q` under `FAST_CONTRACTION`), infinite otherwise. A
-/// run whose next step would be far under the tolerance then stops one
-/// iteration earlier: on a tracked frame, steps of 0.37, 9.5e-3 and
-/// 4.3e-4 px (then 5.4e-5) stop after the third, with about 4e-5 px left
-/// (1e-4 px tolerance).
-fn error_left(step: f64, previous: [f64; 2]) -> f64 {
-    let q = (step / previous[1]).max(previous[1] / previous[0]);
-    if previous[0].is_finite() && q < FAST_CONTRACTION {
+/// two steps before it being `previous` (older first, infinite when the run
+/// has not made them) and `known` the slowest contraction the system
+/// showed on earlier runs (`Correlation::contraction`):
+/// Gauss–Newton with a constant matrix contracts linearly, and with `q` the
+/// larger ratio of the last three steps the steps still to come add up to
+/// about `step q / (1 - q)`; taken twice for safety, and only once three
+/// steps show a good contraction (`q` under `FAST_CONTRACTION`), infinite
+/// otherwise. A run whose next step would be far under the tolerance then
+/// stops one iteration earlier: on a tracked frame, steps of 0.37, 9.5e-3
+/// and 4.3e-4 px (then 5.4e-5) stop after the third, with about 4e-5 px
+/// left (1e-4 px tolerance).
+///
+/// The contraction is a property of the system, not of the run: on a band
+/// that earlier runs have shown to contract fast (a kept band's next
+/// frames, see `TrackCache`), two steps of the run do, `q` then being at
+/// least what those runs showed. On the `track_speed` example's star such frames take
+/// steps of about 5e-2, 5e-4 and 1e-5 px, ratios of 0.01 to 0.03 on every
+/// frame of a band: they stop after the second.
+fn error_left(step: f64, previous: [f64; 2], known: Option<f64>) -> f64 {
+    let q = match (previous[0].is_finite(), known) {
+        (true, _) => (step / previous[1]).max(previous[1] / previous[0]),
+        (false, Some(k)) if previous[1].is_finite() => (step / previous[1]).max(k),
+        _ => return f64::INFINITY,
+    };
+    if q < FAST_CONTRACTION {
         2.0 * step * q / (1.0 - q)
     } else {
         f64::INFINITY
@@ -1630,5 +1650,65 @@ fn report(
         seconds: started.elapsed().as_secs_f64(),
         outcome,
         history,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INF: f64 = f64::INFINITY;
+
+    /// The steps of a linear contraction by `q` from a first step `first`.
+    fn steps(first: f64, q: f64, n: usize) -> Vec<f64> {
+        (0..n).map(|k| first * q.powi(k as i32)).collect()
+    }
+
+    #[test]
+    fn two_steps_need_a_known_contraction() {
+        let s = steps(5e-2, 0.01, 2);
+        // Nothing known: two steps say nothing yet.
+        assert_eq!(error_left(s[1], [INF, s[0]], None), INF);
+        // A known fast contraction: twice `step q / (1 - q)`, with `q` the
+        // slower of the known one and the run's own ratio.
+        let left = error_left(s[1], [INF, s[0]], Some(0.03));
+        assert!((left - 2.0 * s[1] * 0.03 / 0.97).abs() < 1e-18, "{left}");
+        let left = error_left(s[1], [INF, s[0]], Some(0.001));
+        assert!((left - 2.0 * s[1] * 0.01 / 0.99).abs() < 1e-18, "{left}");
+        // A known slow one, or a run slower than `FAST_CONTRACTION`: none.
+        assert_eq!(error_left(s[1], [INF, s[0]], Some(0.3)), INF);
+        assert_eq!(error_left(0.3 * s[0], [INF, s[0]], Some(0.01)), INF);
+        // A first step: nothing to compare it with.
+        assert_eq!(error_left(s[0], [INF, INF], Some(0.01)), INF);
+    }
+
+    #[test]
+    fn three_steps_go_by_the_run_alone() {
+        let s = steps(0.37, 0.03, 3);
+        let own = error_left(s[2], [s[0], s[1]], None);
+        assert!((own - 2.0 * s[2] * 0.03 / 0.97).abs() < 1e-15, "{own}");
+        for known in [Some(0.001), Some(0.2), Some(0.9)] {
+            assert_eq!(error_left(s[2], [s[0], s[1]], known), own);
+        }
+    }
+
+    /// Whenever the contraction is as fast as the estimate assumes (every
+    /// ratio at most the larger of the known one and the run's), the error
+    /// left (the sum of the steps still to come) is under the estimate.
+    #[test]
+    fn the_estimate_bounds_a_linear_contraction() {
+        for q in [0.001, 0.01, 0.05, 0.1, 0.2, 0.24] {
+            for known in [q, 1.5 * q, 0.24] {
+                let s = steps(0.1, q, 40);
+                let left: f64 = s[2..].iter().sum();
+                let estimate = error_left(s[1], [INF, s[0]], Some(known));
+                assert!(
+                    left <= estimate,
+                    "q {q}, known {known}: {left} > {estimate}"
+                );
+                let left: f64 = s[3..].iter().sum();
+                assert!(left <= error_left(s[2], [s[0], s[1]], None), "q {q}");
+            }
+        }
     }
 }

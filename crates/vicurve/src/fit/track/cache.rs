@@ -17,7 +17,8 @@
 //! largest margin per frame gets the smallest (no frame could reuse its
 //! band). A frame on a kept band starts from the kept displacement moved
 //! on as the curve moved over the last frame (a steady motion then needs
-//! fewer iterations). The light's tilt measured on the band's first
+//! fewer iterations, and stops after two steps when the band's earlier
+//! frames showed a fast contraction: `fit::error_left`). The light's tilt measured on the band's first
 //! frame, and the blur it fitted, serve its later ones (a sequence's light
 //! and focus change slowly; the next band measures them again).
 //!
@@ -25,8 +26,8 @@
 //! A sequence that is stopped and resumed must give the same results to
 //! the last digit as an uninterrupted run, so what the cache holds can be
 //! written down ([`TrackCache::snapshot`], a few hundred numbers: the
-//! band's reference, its displacement and tilt, the margin and the
-//! motion) and read back ([`TrackCache::from_snapshot`]): the band is then
+//! band's reference, its displacement and tilt, how fast its iteration
+//! contracted, the margin and the motion) and read back ([`TrackCache::from_snapshot`]): the band is then
 //! built again on the next frame, and everything built from it (the band,
 //! `M0`, the levels' matrices, the tilt at the pixels from its recorded
 //! coefficients) is a deterministic function of what was written
@@ -139,6 +140,10 @@ struct BandRecord {
     /// The light's tilt, in the levels' basis (varying levels); `None`:
     /// none measured.
     tilt: Option<Vec<f64>>,
+    /// The slowest contraction the system's runs showed (see
+    /// `Correlation::contraction`); `None` in files written before it was.
+    #[serde(default)]
+    contraction: Option<f64>,
 }
 
 impl BandRecord {
@@ -167,6 +172,7 @@ impl BandRecord {
             width: kept.size.0,
             height: kept.size.1,
             tilt: kept.corr.measured_tilt().and_then(|t| t.coefs.clone()),
+            contraction: kept.corr.contraction(),
         })
     }
 
@@ -196,7 +202,10 @@ impl BandRecord {
             blur: self.blur,
             coefs: self.tilt,
         };
-        let corr = Correlation::prepare(band, basis, sampler, self.levels, Some(&tilt))?;
+        let mut corr = Correlation::prepare(band, basis, sampler, self.levels, Some(&tilt))?;
+        if let Some(q) = self.contraction {
+            corr.observe_contraction(q);
+        }
         Ok(Kept {
             reference,
             corr,
