@@ -350,6 +350,34 @@ impl Basis {
         e
     }
 
+    /// Second derivatives (along `s`, 1/px^2) of the `p + 1` non-zero
+    /// functions at `s` into `d2[..=p]`; returns the index of the first
+    /// one (as [`Basis::eval`]). On uniform knots the second difference of
+    /// the degree `p - 2` values (cheaper than [`Basis::eval_derivs`]);
+    /// zeros for degree 1.
+    #[inline]
+    pub fn eval_d2(&self, s: f64, d2: &mut [f64; MAX_DEGREE + 1]) -> usize {
+        let p = self.degree;
+        if self.knotted.is_some() || p < 2 {
+            let b = self.eval_derivs(s);
+            d2[..=p].copy_from_slice(&b.d2[..=p]);
+            return b.first;
+        }
+        let (e, t) = self.locate(s);
+        let mut lower = [0.0; MAX_DEGREE + 1];
+        cardinal_values(p - 2, t, &mut lower);
+        // d2 N_k = (M_{k-2} - 2 M_{k-1} + M_k) / h^2, M the degree p - 2
+        // functions of this element (indices past 0..=p-2 are zero).
+        let at = |j: usize| if j <= p - 2 { lower[j] } else { 0.0 };
+        let inv_h2 = 1.0 / (self.h * self.h);
+        for (k, v) in d2.iter_mut().take(p + 1).enumerate() {
+            let m2 = if k >= 2 { at(k - 2) } else { 0.0 };
+            let m1 = if k >= 1 { at(k - 1) } else { 0.0 };
+            *v = (m2 - 2.0 * m1 + at(k)) * inv_h2;
+        }
+        e
+    }
+
     /// Values and first and second derivatives at `s`.
     pub fn eval_derivs(&self, s: f64) -> BasisValues {
         let (e, t) = self.locate(s);

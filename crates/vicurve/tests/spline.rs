@@ -110,6 +110,33 @@ proptest! {
     }
 }
 
+proptest! {
+    /// The uniform second difference of `eval_d2` against `eval_derivs`
+    /// (itself checked against finite differences above), plain and broken
+    /// bases alike.
+    #[test]
+    fn second_derivatives_alone_match_eval_derivs((basis, s) in basis_strategy()) {
+        check_d2(&basis, s)?;
+    }
+
+    #[test]
+    fn broken_second_derivatives_alone_match((basis, s) in broken_strategy()) {
+        check_d2(&basis, s)?;
+    }
+}
+
+fn check_d2(basis: &Basis, s: f64) -> Result<(), TestCaseError> {
+    let mut d2 = [f64::NAN; MAX_DEGREE + 1];
+    let first = basis.eval_d2(s, &mut d2);
+    let d = basis.eval_derivs(s);
+    prop_assert_eq!(first, d.first);
+    let scale = 1.0 / basis.element_length().powi(2);
+    for (k, (a, b)) in d2.iter().zip(&d.d2).take(basis.degree() + 1).enumerate() {
+        prop_assert!((a - b).abs() <= 1e-12 * scale, "{k}: {a} vs {b}");
+    }
+    Ok(())
+}
+
 #[test]
 fn counts_and_knots() {
     let open = Basis::new(3, 10, 100.0, false).unwrap();

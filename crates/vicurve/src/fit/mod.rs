@@ -503,6 +503,9 @@ fn run_schedule_here(
                 for (l, v) in lambda.iter_mut().zip(velocity.iter().flatten()) {
                     *l += v;
                 }
+                // The profile on the curvature of that curve, as a band
+                // built on it would have (see `band`).
+                corr.band.bend_to(&corr.basis, &lambda);
                 run_start = Some(kept);
             } else if tracked.is_some() {
                 run_start = Some(lambda.clone());

@@ -102,6 +102,14 @@ impl Profile {
         }
     }
 
+    /// Whether the fit pushes this profile to the pixel centres (the pixel
+    /// edge, which models the pixels' own integration) rather than pulling
+    /// the image back onto the reference (the paper's profiles); see
+    /// `fit::correlation`.
+    pub fn is_pushed(self) -> bool {
+        matches!(self, Profile::PixelEdge { .. })
+    }
+
     /// `(gamma, d gamma / d r)` at signed distance `r` (pixels) from the
     /// curve, for a band of half-width `half_width` (pixels), at a point whose
     /// closest point on the curve has unit normal `normal` and signed
