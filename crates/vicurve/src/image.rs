@@ -50,6 +50,27 @@ impl Image {
                 what: format!("image pixel (x={}, y={})", i % width, i / width),
             });
         }
+        Image::new_finite(width, height, data)
+    }
+
+    /// [`Image::new`] for pixels that are finite by construction (converted
+    /// from integers): the sizes are checked, the values not (scanning a
+    /// megapixel costs a fair share of a frame's decoding).
+    pub(crate) fn new_finite(width: usize, height: usize, data: Vec<f64>) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::EmptyImage { width, height });
+        }
+        if data.len() != width * height {
+            return Err(Error::invalid(
+                "image data",
+                format!(
+                    "{} values for a {width}x{height} image (expected {})",
+                    data.len(),
+                    width * height
+                ),
+            ));
+        }
+        debug_assert!(data.iter().all(|v| v.is_finite()));
         Ok(Image {
             width,
             height,

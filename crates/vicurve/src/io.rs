@@ -430,7 +430,11 @@ fn to_gray(path: &Path, decoded: DynamicImage) -> Result<Image> {
     const U8: f64 = 255.0;
     const U16: f64 = 65535.0;
     let data = match &decoded {
-        DynamicImage::ImageLuma8(b) => gray_values(b.as_raw(), 1, U8),
+        // The 256 levels divided once (the same values, bit for bit).
+        DynamicImage::ImageLuma8(b) => {
+            let levels: [f64; 256] = std::array::from_fn(|k| k as f64 / U8);
+            b.as_raw().iter().map(|&v| levels[usize::from(v)]).collect()
+        }
         DynamicImage::ImageLumaA8(b) => gray_values(b.as_raw(), 2, U8),
         DynamicImage::ImageRgb8(b) => gray_values(b.as_raw(), 3, U8),
         DynamicImage::ImageRgba8(b) => gray_values(b.as_raw(), 4, U8),
@@ -438,8 +442,12 @@ fn to_gray(path: &Path, decoded: DynamicImage) -> Result<Image> {
         DynamicImage::ImageLumaA16(b) => gray_values(b.as_raw(), 2, U16),
         DynamicImage::ImageRgb16(b) => gray_values(b.as_raw(), 3, U16),
         DynamicImage::ImageRgba16(b) => gray_values(b.as_raw(), 4, U16),
-        DynamicImage::ImageRgb32F(b) => gray_values(b.as_raw(), 3, 1.0),
-        DynamicImage::ImageRgba32F(b) => gray_values(b.as_raw(), 4, 1.0),
+        DynamicImage::ImageRgb32F(b) => {
+            return build_image(path, width, height, gray_values(b.as_raw(), 3, 1.0))
+        }
+        DynamicImage::ImageRgba32F(b) => {
+            return build_image(path, width, height, gray_values(b.as_raw(), 4, 1.0))
+        }
         other => {
             return Err(Error::UnsupportedImage {
                 path: path.to_path_buf(),
@@ -447,7 +455,8 @@ fn to_gray(path: &Path, decoded: DynamicImage) -> Result<Image> {
             })
         }
     };
-    build_image(path, width, height, data)
+    // Integer levels: finite by construction.
+    Image::new_finite(width, height, data)
 }
 
 /// One gray level per pixel of interleaved samples, divided by `divisor`:

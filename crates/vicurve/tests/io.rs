@@ -83,6 +83,23 @@ fn gray8_png_and_tiff_are_divided_by_255() {
     }
 }
 
+/// Every one of the 256 levels (read through a table of them), bit for
+/// bit.
+#[test]
+fn every_8_bit_level_reads_as_level_over_255() {
+    let dir = TempDir::new("gray8-all");
+    let buffer: ImageBuffer<Luma<u8>, Vec<u8>> =
+        ImageBuffer::from_fn(16, 16, |x, y| Luma([(y * 16 + x) as u8]));
+    let p = dir.write(
+        "all.png",
+        &encode(&DynamicImage::ImageLuma8(buffer), ImageFormat::Png),
+    );
+    let image = load_image(&p).unwrap();
+    for (k, v) in image.data().iter().enumerate() {
+        assert_eq!(v.to_bits(), (k as f64 / 255.0).to_bits(), "level {k}");
+    }
+}
+
 #[test]
 fn gray16_png_and_tiff_are_divided_by_65535() {
     let dir = TempDir::new("gray16");
