@@ -464,7 +464,9 @@ impl Model for EllipseModel<'_> {
                 let f = foot(a, b, u, v);
                 let (cos_t, sin_t) = (f[0] / a, f[1] / b);
                 let nl = [b * cos_t, a * sin_t];
-                let len = nl[0].hypot(nl[1]);
+                // sqrt, not hypot: pixel scales cannot overflow, and hypot
+                // took a tenth of the fit.
+                let len = (nl[0] * nl[0] + nl[1] * nl[1]).sqrt();
                 let (n0, n1) = (nl[0] / len, nl[1] / len);
                 *ri = (u - f[0]) * n0 + (v - f[1]) * n1;
                 row[0] = -(n0 * ua[0] + n1 * ub[0]);

@@ -17,6 +17,15 @@ const STEP_TOLERANCE: f64 = 1e-13;
 /// A damping this large means no step lowers the cost any more: the
 /// current point is a minimum to rounding.
 const MAX_DAMPING: f64 = 1e16;
+/// The iteration also stops when no unknown moves by more than this
+/// fraction of its standard deviation (bounded below by `s / sqrt(A_ii)`,
+/// `s^2` the cost per degree of freedom and `A` the normal matrix: in the
+/// Jacobi-scaled unknowns, a step under this fraction of `s`). Steps that
+/// small change nothing the deviations can tell apart, and near rounding
+/// most of them are rejected one after another: on the best-fit ellipse
+/// of a 2000 px star (residuals of 11 px), 10 iterations made 26 trials,
+/// 16 of them rejected at the end.
+const NEGLIGIBLE_STEP: f64 = 1e-6;
 
 /// Per-point weights from per-point standard deviations: `1 / sigma^2` when
 /// every value is finite and positive, `None` (unweighted) otherwise.
@@ -141,10 +150,11 @@ pub(crate) fn minimise(
                 .zip(&d)
                 .map(|((v, s), di)| v + s / di)
                 .collect();
-            let small = p
-                .iter()
-                .zip(&trial)
-                .all(|(a, b)| (a - b).abs() <= STEP_TOLERANCE * (1.0 + a.abs()));
+            let negligible = NEGLIGIBLE_STEP * (cost / n.saturating_sub(k).max(1) as f64).sqrt();
+            let small = step.iter().all(|s| s.abs() <= negligible)
+                || p.iter()
+                    .zip(&trial)
+                    .all(|(a, b)| (a - b).abs() <= STEP_TOLERANCE * (1.0 + a.abs()));
             if model.eval(&trial, &mut tr, &mut tjac) {
                 let tcost = weighted_cost(&tr, w);
                 if tcost.is_finite() && tcost <= cost {
