@@ -565,13 +565,14 @@ fn measure_curve_with<'s>(
 
 /// The start of a tracked frame measured with the job's stages (the
 /// tracking schedule refits its start itself): the previous curve refitted
-/// with control points [`START_SPACING`] apart. The measured curve has control points 2 px
-/// apart and carries the previous frame's noise at that scale; a fit whose
-/// displacement has longer elements (as a schedule without coarse stages
-/// has) cannot remove it, so it would pass on to the next frame and grow:
-/// tracking a 2000 px star with the `2:auto` stage alone, the error grew from
-/// 0.04 to 5 px within 18 frames from the measured curve, and stayed at
-/// 0.04 px over 30 frames from the smoothed one (`examples/track_speed.rs`).
+/// with control points [`START_SPACING`] apart. The measured curve has
+/// control points 2 px apart and carries the previous frame's noise at
+/// that scale; a fit whose displacement has longer elements (as a schedule
+/// without coarse stages has) cannot remove it, so it would pass on to the
+/// next frame and grow: tracking a 2000 px star with the `2:auto` stage
+/// alone, the error grew from 0.04 to 5 px within 18 frames from the
+/// measured curve, and stayed at 0.04 px over 30 frames from the smoothed
+/// one (`examples/track_speed.rs`).
 fn tracked_start(curve: &SplineCurve) -> Result<SplineCurve, String> {
     let length = curve.param_length();
     let spacing = (length / 16.0).clamp(2.0, START_SPACING);

@@ -177,9 +177,9 @@ pub(crate) struct Correlation {
     displaced_gradient: bool,
     /// The slowest contraction its runs have shown: the largest ratio of
     /// a step to the one before it in the same run (`None` before a run's
-    /// second step). A property of the system (`M0` against the image's
-    /// own curvature of the residual), which stays as long as `M0` and
-    /// the gradient do: a kept band's next frames may rely on it
+    /// second step). A property of the system (how far `M0` is from the
+    /// residual's own curvature), which stays as long as `M0` and the
+    /// gradient do: a kept band's next frames may rely on it
     /// (`fit::error_left`).
     contraction: Option<f64>,
 }

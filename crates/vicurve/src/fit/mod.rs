@@ -1000,9 +1000,9 @@ fn iterate_to_end(
 /// The contraction is a property of the system, not of the run: on a band
 /// that earlier runs have shown to contract fast (a kept band's next
 /// frames, see `TrackCache`), two steps of the run do, `q` then being at
-/// least what those runs showed. On the `track_speed` example's star such frames take
-/// steps of about 5e-2, 5e-4 and 1e-5 px, ratios of 0.01 to 0.03 on every
-/// frame of a band: they stop after the second.
+/// least what those runs showed. On the `track_speed` example's star such
+/// frames take steps of about 5e-2, 5e-4 and 1e-5 px, ratios of 0.01 to
+/// 0.03 on every frame of a band: they stop after the second.
 fn error_left(step: f64, previous: [f64; 2], known: Option<f64>) -> f64 {
     let q = match (previous[0].is_finite(), known) {
         (true, _) => (step / previous[1]).max(previous[1] / previous[0]),

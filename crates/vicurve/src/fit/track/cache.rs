@@ -18,17 +18,20 @@
 //! band). A frame on a kept band starts from the kept displacement moved
 //! on as the curve moved over the last frame (a steady motion then needs
 //! fewer iterations, and stops after two steps when the band's earlier
-//! frames showed a fast contraction: `fit::error_left`). The light's tilt measured on the band's first
-//! frame, and the blur it fitted, serve its later ones (a sequence's light
-//! and focus change slowly; the next band measures them again).
+//! frames showed a fast contraction: `fit::error_left`), with the
+//! curvature of that curve in the profile (`Band::bend_to`). The light's
+//! tilt measured on the band's first frame, and the blur it fitted, serve
+//! its later ones (a sequence's light and focus change slowly; the next
+//! band measures them again).
 //!
 //! # Resuming
 //! A sequence that is stopped and resumed must give the same results to
 //! the last digit as an uninterrupted run, so what the cache holds can be
 //! written down ([`TrackCache::snapshot`], a few hundred numbers: the
 //! band's reference, its displacement and tilt, how fast its iteration
-//! contracted, the margin and the motion) and read back ([`TrackCache::from_snapshot`]): the band is then
-//! built again on the next frame, and everything built from it (the band,
+//! contracted, the margin and the motion) and read back
+//! ([`TrackCache::from_snapshot`]): the band is then built again on the
+//! next frame, and everything built from it (the band,
 //! `M0`, the levels' matrices, the tilt at the pixels from its recorded
 //! coefficients) is a deterministic function of what was written
 //! (`solver::chunked` sums, bands in raster order), so the system is the
