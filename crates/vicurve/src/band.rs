@@ -638,13 +638,7 @@ impl Band {
                 let mut inside = 0;
                 for (j, w) in chunk.iter_mut().enumerate() {
                     let i = k * RECENTRE_CHUNK + j;
-                    let first = first[i] as usize;
-                    let vals = &values[i * (p + 1)..(i + 1) * (p + 1)];
-                    let u: f64 = vals
-                        .iter()
-                        .enumerate()
-                        .map(|(k, v)| lambda[basis.index(first, k)] * v)
-                        .sum();
+                    let u = displacement(basis, first[i], &values[i * (p + 1)..], lambda);
                     *w = if (r[i] - u).abs() < h {
                         inside += 1;
                         full[i]
@@ -658,6 +652,14 @@ impl Band {
             .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         self.inside = inside;
         sum
+    }
+
+    /// `U` at pixel `i` for the displacement `lambda` (coefficients in
+    /// `basis`, the band's), pixels.
+    #[inline]
+    pub(crate) fn displacement_at(&self, basis: &Basis, i: usize, lambda: &[f64]) -> f64 {
+        let p = self.degree;
+        displacement(basis, self.first[i], &self.basis[i * (p + 1)..], lambda)
     }
 
     /// The profile of the virtual image.
@@ -721,14 +723,8 @@ impl Band {
             .for_each(|(k, chunk)| {
                 for (j, bent) in chunk.iter_mut().enumerate() {
                     let i = k * RECENTRE_CHUNK + j;
-                    let f = first[i] as usize;
-                    let range = i * (p + 1)..(i + 1) * (p + 1);
-                    let (mut u, mut u2) = (0.0, 0.0);
-                    for (m, (v, v2)) in values[range.clone()].iter().zip(&d2[range]).enumerate() {
-                        let l = lambda[basis.index(f, m)];
-                        u += l * v;
-                        u2 += l * v2;
-                    }
+                    let u = displacement(basis, first[i], &values[i * (p + 1)..], lambda);
+                    let u2 = displacement(basis, first[i], &d2[i * (p + 1)..], lambda);
                     let q = 1.0 - kappa[i] * u;
                     *bent = if q > MIN_JACOBIAN {
                         kappa[i] / q + u2 / (q * q)
@@ -758,6 +754,19 @@ impl Band {
     pub fn r(&self) -> &[f64] {
         &self.r
     }
+}
+
+/// `sum_k lambda[first + k] values[k]` over the `p + 1` functions of
+/// `basis` from `first` (a pixel's `U` from its basis values, or `U''`
+/// from their second derivatives).
+#[inline]
+fn displacement(basis: &Basis, first: u32, values: &[f64], lambda: &[f64]) -> f64 {
+    let first = first as usize;
+    values[..=basis.degree()]
+        .iter()
+        .enumerate()
+        .map(|(k, v)| lambda[basis.index(first, k)] * v)
+        .sum()
 }
 
 /// Which pixels a band keeps: those within `reach` of the curve (one in

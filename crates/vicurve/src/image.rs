@@ -25,6 +25,24 @@ pub struct Image {
     data: Arc<Vec<f64>>,
 }
 
+/// The size checks of [`Image::new`]: `len` values for a `width x height`
+/// image, neither side 0.
+fn check_size(width: usize, height: usize, len: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::EmptyImage { width, height });
+    }
+    if len != width * height {
+        return Err(Error::invalid(
+            "image data",
+            format!(
+                "{len} values for a {width}x{height} image (expected {})",
+                width * height
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl Image {
     /// An image from its pixels, row after row (`data[y * width + x]`).
     ///
@@ -32,44 +50,24 @@ impl Image {
     /// [`Error::InvalidParameter`] when `data.len() != width * height`,
     /// [`Error::NonFinite`] when a pixel is NaN or infinite.
     pub fn new(width: usize, height: usize, data: Vec<f64>) -> Result<Self> {
-        if width == 0 || height == 0 {
-            return Err(Error::EmptyImage { width, height });
-        }
-        if data.len() != width * height {
-            return Err(Error::invalid(
-                "image data",
-                format!(
-                    "{} values for a {width}x{height} image (expected {})",
-                    data.len(),
-                    width * height
-                ),
-            ));
-        }
+        check_size(width, height, data.len())?;
         if let Some(i) = data.iter().position(|v| !v.is_finite()) {
             return Err(Error::NonFinite {
                 what: format!("image pixel (x={}, y={})", i % width, i / width),
             });
         }
-        Image::new_finite(width, height, data)
+        Ok(Image {
+            width,
+            height,
+            data: Arc::new(data),
+        })
     }
 
     /// [`Image::new`] for pixels that are finite by construction (converted
     /// from integers): the sizes are checked, the values not (scanning a
     /// megapixel costs a fair share of a frame's decoding).
     pub(crate) fn new_finite(width: usize, height: usize, data: Vec<f64>) -> Result<Self> {
-        if width == 0 || height == 0 {
-            return Err(Error::EmptyImage { width, height });
-        }
-        if data.len() != width * height {
-            return Err(Error::invalid(
-                "image data",
-                format!(
-                    "{} values for a {width}x{height} image (expected {})",
-                    data.len(),
-                    width * height
-                ),
-            ));
-        }
+        check_size(width, height, data.len())?;
         debug_assert!(data.iter().all(|v| v.is_finite()));
         Ok(Image {
             width,

@@ -21,21 +21,27 @@ fn frame(k: usize) -> (Image, Shape) {
         cy: 149.6 - 0.2 * k as f64,
         r: 90.0,
     };
+    (disc_image(shape.clone(), 300, k as u64 + 7), shape)
+}
+
+/// A `size x size` exact-coverage silhouette of `shape`, blur 1 px, noise
+/// 0.2 % of the range (noise `seed`), 16 bits.
+fn disc_image(shape: Shape, size: usize, seed: u64) -> Image {
     let spec = RenderSpec {
-        width: 300,
-        height: 300,
-        shape: shape.clone(),
+        width: size,
+        height: size,
+        shape,
         kind: Kind::Silhouette,
         method: Method::Coverage,
         foreground: 0.8,
         background: 0.2,
         blur_sigma: 1.0,
         noise: 0.002,
-        seed: k as u64 + 7,
+        seed,
         bits: Some(16),
         ..RenderSpec::default()
     };
-    (render(&spec).unwrap(), shape)
+    render(&spec).unwrap()
 }
 
 fn errors(m: &Measurement, shape: &Shape) -> ErrorStats {
@@ -159,23 +165,7 @@ fn a_disc_that_shrinks_or_grows_keeps_its_radius_on_kept_bands() {
             cy: 99.6,
             r: 25.0 + rate * k as f64,
         };
-        let image = |k: usize| {
-            let spec = RenderSpec {
-                width: 200,
-                height: 200,
-                shape: disc(k),
-                kind: Kind::Silhouette,
-                method: Method::Coverage,
-                foreground: 0.8,
-                background: 0.2,
-                blur_sigma: 1.0,
-                noise: 0.002,
-                seed: k as u64 + 1,
-                bits: Some(16),
-                ..RenderSpec::default()
-            };
-            render(&spec).unwrap()
-        };
+        let image = |k: usize| disc_image(disc(k), 200, k as u64 + 1);
         let init = InitialCurve::Circle {
             cx: 100.0,
             cy: 100.0,

@@ -771,13 +771,7 @@ impl Correlation {
 
     /// `U` at band pixel `i` for `lambda`.
     fn displacement_at(&self, i: usize, lambda: &[f64]) -> f64 {
-        let p = self.basis.degree();
-        let first = self.band.first[i] as usize;
-        self.band.basis[i * (p + 1)..(i + 1) * (p + 1)]
-            .iter()
-            .enumerate()
-            .map(|(k, v)| lambda[self.basis.index(first, k)] * v)
-            .sum()
+        self.band.displacement_at(&self.basis, i, lambda)
     }
 
     /// The gray levels `(a, c)` of the last iteration at band pixel `i`
