@@ -42,7 +42,7 @@
 //!
 //! Breaks need the exact closest-point coordinates (`coords = exact`).
 
-use super::{displaced_point, REFERENCE_SAMPLE_STEP};
+use super::reference::{displaced_point, REFERENCE_SAMPLE_STEP};
 use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::{Error, Result};
 use crate::spline::{Basis, Break, MAX_DEGREE};

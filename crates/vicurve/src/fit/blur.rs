@@ -1,0 +1,100 @@
+//! The edge's blur: estimated on the measured curve, it chooses the band
+//! matched to the edge (the paper's optimum `R_g = R_f`) or the pixel-edge
+//! profile through that blur, whose own blur is then fitted on the band.
+
+use super::correlation::Correlation;
+use crate::curve::SplineCurve;
+use crate::interp::Sampler;
+use crate::psf;
+use crate::virtual_image::{Kind, Profile};
+
+/// Half-width of the first band on which the edge's blur is estimated,
+/// pixels (a wider one is tried when the edge fills it).
+const EDGE_SPREAD_BAND: f64 = 8.0;
+/// The band half-width that matches an edge of spread `s` is about
+/// `MATCHED_BAND * s` (the transition of an error-function edge spans
+/// roughly +-2.5 s; R = 2 px for a sharp, focused edge).
+const MATCHED_BAND: f64 = 2.5;
+/// A band narrower than the matched one by more than this factor does not
+/// see the whole edge.
+pub(super) const BAND_MISMATCH: f64 = 1.5;
+/// The blur correction needs an edge that an error function fits this well
+/// (fraction of the variance explained); clutter or texture turn it off.
+pub(super) const MIN_EDGE_FIT_QUALITY: f64 = 0.8;
+/// Band pixels used to fit the blur of the pixel-edge profile at most.
+pub(crate) const BLUR_FIT_PIXELS: usize = 8192;
+/// Runs of the pixel-edge stage with an updated blur, at most.
+pub(super) const MAX_BLUR_UPDATES: usize = 3;
+/// A fitted blur that differs from the one in use by more than this (pixels)
+/// is worth another run.
+pub(crate) const BLUR_TOLERANCE: f64 = 0.01;
+/// The pixel-edge stage's band covers the pixel's largest extent along a
+/// normal (`sqrt(2) / 2` px), this many blur deviations and
+/// `PIXEL_EDGE_PLATEAU` px of the flat levels on each side, and is at least
+/// `PIXEL_EDGE_MIN_BAND` px wide. Narrow on purpose: the flat levels fix
+/// `a` and `c`, and on a noiseless 8-bit image a flat level rounded by up to
+/// half a gray level no longer lies on the line through the transition's
+/// levels; the wider its share of the band, the more the curve follows it
+/// (see docs/benchmarks.md).
+const PIXEL_EDGE_REACH: f64 = 2.0;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_PLATEAU: f64 = 0.5;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
+
+/// The spread of the edge (silhouettes) or line (contours) around
+/// `curve` ([`psf::edge_spread`], [`psf::line_spread`]). An edge's search is
+/// bounded by a third of the band, so a result near that bound is estimated
+/// again on a band four times the spread.
+pub(super) fn estimate_spread(
+    sampler: &Sampler,
+    curve: &SplineCurve,
+    kind: Kind,
+) -> Option<psf::EdgeSpread> {
+    if kind == Kind::Contour {
+        return psf::line_spread(sampler, curve, EDGE_SPREAD_BAND);
+    }
+    let first = psf::edge_spread(sampler, curve, EDGE_SPREAD_BAND)?;
+    if first.sigma < 0.9 * EDGE_SPREAD_BAND / 3.0 {
+        return Some(first);
+    }
+    psf::edge_spread(sampler, curve, 4.0 * first.sigma).or(Some(first))
+}
+
+/// The band half-width that sees the whole edge or line: `2.5 s` for an
+/// edge, plus half the width for a line.
+pub(super) fn matched_band(e: &psf::EdgeSpread) -> f64 {
+    MATCHED_BAND * e.sigma + 0.5 * e.line_width.unwrap_or(0.0)
+}
+
+/// The optical blur (pixels) of the pixel-edge profile that best fits the
+/// band of `corr` at `lambda` (least squares, gray levels refitted; golden
+/// section within 30 % + 0.15 px of `current`, on at most `BLUR_FIT_PIXELS`
+/// band pixels; when the optimum is at the bracket's end, the caller's next
+/// run brackets again around it). The position hardly depends on the blur
+/// along a straight edge (the profile is symmetric), but a mismatched width
+/// makes the fit depend on the edge's sub-pixel phase.
+pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
+    let stride = corr.band.len().div_ceil(BLUR_FIT_PIXELS);
+    let ssr = |blur: f64| {
+        corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
+            .unwrap_or(f64::INFINITY)
+    };
+    let lo = (0.7 * current - 0.15).max(0.0);
+    let hi = 1.3 * current + 0.15;
+    // 12 steps: the bracket shrinks to 3e-3 of its width.
+    let best = psf::golden(lo, hi, 12, ssr);
+    // The bracket's ends are never evaluated: a focused edge's optimum is 0.
+    if lo == 0.0 && ssr(0.0) <= ssr(best) {
+        0.0
+    } else {
+        best
+    }
+}
+
+/// Half-width of the band of the pixel-edge stage for an optical blur of
+/// `blur` pixels (see the constants), rounded up to a quarter pixel.
+pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
+    let r = std::f64::consts::FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
+    (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
+}

@@ -1,0 +1,205 @@
+//! The result of the last stage (method, section 8): the measured curve
+//! `x0 + U n` refitted as a B-spline, its samples with normals, `sigma`
+//! and robust weight, and the gray levels along it.
+
+use super::breaks;
+use super::correlation::Correlation;
+use super::reference::{chord_lengths, CURVE_SPACING};
+use super::{LevelSample, Sample};
+use crate::curve::SplineCurve;
+use crate::error::Result;
+use crate::virtual_image::Profile;
+use rayon::prelude::*;
+
+/// Largest spacing of the points of `x0 + U n` the output curve is fitted
+/// to (control points `CURVE_SPACING` apart: four points per interval),
+/// pixels; see [`Final::samples`] for the spacing taken.
+const FINE_STEP: f64 = 0.5;
+/// How much the displacement may stretch the reference (`1 + U kappa`)
+/// before the output samples, every `k`-th point of `x0 + U n`, come
+/// closer than the requested spacing ([`Final::samples`]).
+const STRETCH_ALLOWANCE: f64 = 0.03;
+/// Spacing of [`super::Measurement::levels`] along the curve, pixels.
+const LEVEL_SAMPLE_SPACING: f64 = 8.0;
+
+/// The last completed stage, kept to produce the output samples and their
+/// uncertainty.
+pub(super) struct Final {
+    /// Band half-width of the stage, pixels.
+    pub half_width: f64,
+    /// The stage's virtual profile.
+    pub profile: Profile,
+    /// The stage's last reference.
+    pub reference: SplineCurve,
+    /// Its system.
+    pub corr: Correlation,
+    /// Its coefficients, pixels.
+    pub lambda: Vec<f64>,
+}
+
+/// What [`Final::samples`] delivers.
+pub(super) struct Output {
+    /// The measured B-spline.
+    pub curve: SplineCurve,
+    /// Its largest distance to the points of `x0 + U n`, pixels.
+    pub fit_error: f64,
+    /// The output samples.
+    pub samples: Vec<Sample>,
+    /// The gray levels along the curve, when they vary.
+    pub levels: Vec<LevelSample>,
+}
+
+impl Final {
+    /// Dense samples of `x0 + U n` (moved by the blur's curvature shift
+    /// when `blur` is given, see [`crate::psf`]), the B-spline of `degree`
+    /// fitted to them and its largest deviation from them, the output
+    /// samples at most `spacing` pixels apart with `sigma`, and the gray
+    /// levels along the curve when they vary.
+    pub fn samples(&self, spacing: f64, degree: usize, blur: Option<f64>) -> Result<Output> {
+        // The output samples are every `per`-th of the points of `x0 + U
+        // n`, so that they are at most `spacing` apart: the points are
+        // taken a little closer than `spacing / per` on the reference, for
+        // the displacement's stretch (else, a chord a hair over half a
+        // pixel would make every point an output sample at 0.5 px).
+        let per = (spacing / FINE_STEP).ceil().max(1.0);
+        let fine_step = spacing / per / (1.0 + STRETCH_ALLOWANCE);
+        let closed = self.reference.is_closed();
+        let (params, mut pts, corners) =
+            breaks::displaced_samples(&self.reference, &self.corr.basis, &self.lambda, fine_step);
+        let mut curve =
+            SplineCurve::fit_with_corners(&pts, closed, degree, CURVE_SPACING, &corners)?;
+        let mut s = chord_lengths(&pts);
+        if let Some(sigma) = blur {
+            for (q, &si) in pts.iter_mut().zip(&s) {
+                let f = curve.frame(si);
+                let shift = crate::psf::curvature_shift(sigma, f.curvature);
+                q[0] += shift * f.normal[0];
+                q[1] += shift * f.normal[1];
+            }
+            curve = SplineCurve::fit_with_corners(&pts, closed, degree, CURVE_SPACING, &corners)?;
+            s = chord_lengths(&pts);
+        }
+        let weights = WeightBins::new(&self.corr, self.reference.param_length());
+        let max_chord = s.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+        let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
+        let levels = self.levels(&params, &s, closed);
+        // In parallel (each point's values are its own; a maximum does not
+        // depend on the order).
+        let fit_error = pts
+            .par_iter()
+            .zip(&s)
+            .map(|(q, &si)| crate::curve::dist(curve.point(si), *q))
+            .reduce(|| 0.0, f64::max);
+        let kept: Vec<usize> = (0..pts.len())
+            .filter(|&i| i % every == 0 || (!closed && i + 1 == pts.len()))
+            .collect();
+        let samples: Vec<Sample> = kept
+            .par_iter()
+            .map(|&i| {
+                let q = pts[i];
+                let f = curve.frame(s[i]);
+                Sample {
+                    s: s[i],
+                    x: q[0],
+                    y: q[1],
+                    nx: f.normal[0],
+                    ny: f.normal[1],
+                    sigma: self.corr.position_sigma(params[i]),
+                    weight: weights.at(params[i]),
+                }
+            })
+            .collect();
+        Ok(Output {
+            curve,
+            fit_error,
+            samples,
+            levels,
+        })
+    }
+
+    /// The gray levels at the points of reference parameters `params` and
+    /// arc lengths `s`, about `LEVEL_SAMPLE_SPACING` apart (and at an open
+    /// curve's end); none when the levels are global.
+    fn levels(&self, params: &[f64], s: &[f64], closed: bool) -> Vec<LevelSample> {
+        let mut levels = Vec::new();
+        if !self.corr.varying_levels() {
+            return levels;
+        }
+        let mut next_level = 0.0;
+        for (i, &u) in params.iter().enumerate() {
+            let last = !closed && i + 1 == params.len();
+            if s[i] >= next_level || last {
+                if let Some((a, c)) = self.corr.levels_at(u) {
+                    levels.push(LevelSample { s: s[i], a, c });
+                }
+                next_level = s[i] + LEVEL_SAMPLE_SPACING;
+            }
+        }
+        levels
+    }
+}
+
+/// Robust weights binned by the reference parameter, 1 px bins (none when
+/// no pixel was reweighted: the weight is 1 everywhere).
+struct WeightBins {
+    /// Sum of the weights and count of the pixels of each bin.
+    bins: Vec<(f64, f64)>,
+}
+
+impl WeightBins {
+    /// The bins of `corr`'s band, on a reference of parameter length `l`.
+    fn new(corr: &Correlation, l: f64) -> Self {
+        if !corr.reweighted() {
+            return WeightBins { bins: Vec::new() };
+        }
+        let nbins = l.ceil() as usize + 1;
+        let mut bins = vec![(0.0, 0.0); nbins];
+        for (i, &u) in corr.band.s.iter().enumerate() {
+            let b = &mut bins[(u.max(0.0) as usize).min(nbins - 1)];
+            b.0 += corr.robust[i];
+            b.1 += 1.0;
+        }
+        WeightBins { bins }
+    }
+
+    /// The mean weight of the bins around reference parameter `u`.
+    fn at(&self, u: f64) -> f64 {
+        let nbins = self.bins.len();
+        if nbins == 0 {
+            return 1.0;
+        }
+        let k = (u.max(0.0) as usize).min(nbins - 1);
+        let (mut sum, mut n) = (0.0, 0.0);
+        for b in &self.bins[k.saturating_sub(1)..=(k + 1).min(nbins - 1)] {
+            sum += b.0;
+            n += b.1;
+        }
+        if n > 0.0 {
+            sum / n
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Samples of a curve without a fit behind them (sigma unknown: NaN).
+pub(super) fn plain_samples(curve: &SplineCurve, spacing: f64) -> Vec<Sample> {
+    let l = curve.param_length();
+    let count = (l / spacing).ceil() as usize;
+    let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
+    params
+        .iter()
+        .map(|&u| {
+            let f = curve.frame(u);
+            Sample {
+                s: u,
+                x: f.point[0],
+                y: f.point[1],
+                nx: f.normal[0],
+                ny: f.normal[1],
+                sigma: f64::NAN,
+                weight: f64::NAN,
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,139 @@
+//! Automatic element length of the last stage: halve the elements on the
+//! same reference while the finer curve differs from the coarser one by
+//! more than the noise explains.
+
+use super::correlation::{Correlation, Step};
+use super::run::{iterate_to_end, Run, RunLimits, RunLog};
+use super::{breaks, FitConfig, IterationRecord, RunKind};
+use crate::band::Band;
+use crate::curve::SplineCurve;
+use crate::error::Result;
+use crate::interp::Sampler;
+use crate::spline::{Basis, MAX_DEGREE};
+use crate::virtual_image::Profile;
+
+/// A converged fit on one reference: its system, coefficients and last step.
+pub(super) struct Fitted {
+    /// The system the fit ran on.
+    pub corr: Correlation,
+    /// Its coefficients, pixels.
+    pub lambda: Vec<f64>,
+    /// Its last step.
+    pub step: Step,
+}
+
+/// The band a refinement builds: half-width (pixels) and profile.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RefineBand {
+    /// Band half-width, pixels.
+    pub half_width: f64,
+    /// The stage's virtual profile.
+    pub profile: Profile,
+}
+
+/// Refine `fit` on `reference` down to elements of `shortest` pixels.
+///
+/// With nested spline spaces the mean squared difference between the two
+/// normal positions is about `rep^2 + (sigma_f^2 - sigma_c^2)`, where `rep`
+/// is the coarse curve's shape (representation) error and `sigma` the noise
+/// scatter of each fit. Refining lowers the total error `rep^2 + sigma^2`
+/// when `rep^2 > sigma_f^2 - sigma_c^2` (the fine error being ~rep/16 for
+/// cubics), i.e. when the difference exceeds twice the noise increase. The
+/// noise variance comes from [`Correlation::estimate_noise`], which excludes
+/// the systematic mismatch between the profiles. A shape error also shrinks
+/// fast with the element length (16 times per halving for cubics, 4 for
+/// linear elements); differences driven by noise or by the aliasing of a
+/// sharp edge on the pixel grid do not, so refinement also stops when the
+/// change is not at least halved (RMS) from one halving to the next.
+///
+/// Returns the fit kept and the iterations used.
+pub(super) fn refine(
+    reference: &SplineCurve,
+    fit: Fitted,
+    shortest: f64,
+    sampler: &Sampler,
+    config: &FitConfig,
+    band: RefineBand,
+    history: &mut Vec<IterationRecord>,
+) -> Result<(Fitted, usize)> {
+    let Fitted {
+        mut corr,
+        mut lambda,
+        mut step,
+    } = fit;
+    let closed = reference.is_closed();
+    let min_el = if closed { config.degree + 1 } else { 1 };
+    let length = reference.param_length();
+    let params = reference.sample_params((length.ceil() as usize).max(8));
+    let mut iterations = 0;
+    let mut previous_diff2 = f64::INFINITY;
+    corr.estimate_noise(&lambda, sampler);
+    loop {
+        let h = corr.basis.element_length() / 2.0;
+        if h < shortest {
+            break;
+        }
+        let n_el = ((length / h).round() as usize).max(min_el);
+        let basis = breaks::displacement_basis(reference, config.degree, n_el)?;
+        let Ok(built) = Band::build_with(
+            reference,
+            &basis,
+            band.half_width,
+            band.profile,
+            sampler.width(),
+            sampler.height(),
+            1,
+            config.coords,
+        ) else {
+            break;
+        };
+        let Ok(mut fine) = Correlation::prepare(built, basis, sampler, config.levels, None) else {
+            break;
+        };
+        let mut fine_lambda = vec![0.0; fine.n_unknowns()];
+        let mut fine_step = None;
+        let (end, used) = iterate_to_end(
+            &mut fine,
+            &mut fine_lambda,
+            sampler,
+            config,
+            RunLimits::refit(config, band.half_width),
+            &mut fine_step,
+            RunLog {
+                history: &mut *history,
+                kind: RunKind::Refine,
+            },
+        );
+        iterations += used;
+        let (Run::Converged, Some(fs)) = (end, fine_step) else {
+            break;
+        };
+        fine.estimate_noise(&fine_lambda, sampler);
+        let (mut diff2, mut noise2) = (0.0, 0.0);
+        for &u in &params {
+            let d =
+                displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
+            diff2 += d * d;
+            let sf = fine.position_sigma(u);
+            let sc = corr.position_sigma(u);
+            noise2 += sf * sf - sc * sc;
+        }
+        // Significant, and still converging like a shape error (a change
+        // that does not shrink is noise or aliasing being chased).
+        if diff2 <= 2.0 * noise2.max(0.0) || diff2 >= 0.25 * previous_diff2 {
+            break;
+        }
+        previous_diff2 = diff2;
+        (corr, lambda, step) = (fine, fine_lambda, fs);
+    }
+    Ok((Fitted { corr, lambda, step }, iterations))
+}
+
+/// `U(u)` of a displacement basis and coefficients, pixels.
+pub(super) fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
+    let mut v = [0.0; MAX_DEGREE + 1];
+    let first = basis.eval(u, &mut v);
+    (0..=basis.degree())
+        .map(|k| lambda[basis.index(first, k)] * v[k])
+        .sum()
+}

@@ -1,0 +1,299 @@
+//! One run: Gauss–Newton iterations on one reference with its constant
+//! matrix (method, section 5), until the step is under the tolerance, the
+//! budget is spent, the displacement calls for a new reference, or a step
+//! fails.
+
+use super::correlation::{Correlation, Step, StepFailure};
+use super::{Divergence, FitConfig, IterationRecord, RunKind};
+use crate::interp::Sampler;
+
+/// A run on one reference that has not converged after this many
+/// iterations goes on with the reference's profile derivative in its
+/// gradient (`Correlation::use_reference_gradient`): the displaced one's
+/// may keep a model that does not fit the image from contracting. Runs
+/// that converge take 2 to 6.
+const DISPLACED_GRADIENT_ITERATIONS: usize = 12;
+/// Contraction ratio of successive steps under which a run's error left
+/// is estimated ([`error_left`]).
+const FAST_CONTRACTION: f64 = 0.25;
+
+/// How a run of Gauss–Newton iterations on one reference ended.
+pub(super) enum Run {
+    /// A step (or the error it leaves) under the tolerance.
+    Converged,
+    /// The budget of iterations was spent.
+    IterationLimit,
+    /// `max |U|` passed the re-referencing limit.
+    Rereference,
+    /// A step could not be made.
+    Failed(Divergence),
+}
+
+/// Where a run stops besides convergence.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RunLimits {
+    /// Iterations allowed.
+    pub budget: usize,
+    /// Convergence tolerance on the step, pixels.
+    pub tolerance: f64,
+    /// A coefficient beyond this (pixels) ends the run for a new
+    /// reference; infinite for none.
+    pub rereference: f64,
+    /// Band half-width, pixels: a step is capped at
+    /// [`FitConfig::max_step_fraction`] of it.
+    pub half_width: f64,
+}
+
+impl RunLimits {
+    /// The whole iteration budget and tolerance of `config`, no
+    /// re-referencing: a fit again on the same reference (refinement,
+    /// reweighting, global levels).
+    pub fn refit(config: &FitConfig, half_width: f64) -> Self {
+        RunLimits {
+            budget: config.max_iterations,
+            tolerance: config.tolerance,
+            rereference: f64::INFINITY,
+            half_width,
+        }
+    }
+}
+
+/// What a run records: the stage's iteration history, under which kind.
+pub(super) struct RunLog<'h> {
+    /// The stage's history, appended to.
+    pub history: &'h mut Vec<IterationRecord>,
+    /// What this run is.
+    pub kind: RunKind,
+}
+
+/// Iterate on one reference until convergence (a step under the
+/// tolerance, or a step that leaves less than that: [`error_left`]), the
+/// iteration budget, a displacement past the re-referencing limit or a
+/// failure. Returns how it ended and the iterations used; `step` keeps the
+/// last successful step.
+pub(super) fn iterate_to_end(
+    corr: &mut Correlation,
+    lambda: &mut [f64],
+    sampler: &Sampler,
+    config: &FitConfig,
+    limits: RunLimits,
+    step: &mut Option<Step>,
+    log: RunLog<'_>,
+) -> (Run, usize) {
+    let RunLog { history, kind } = log;
+    let mut relax = Relaxation::new(lambda.len());
+    let cap = config.max_step_fraction * limits.half_width;
+    let mut used = 0;
+    // The two raw steps before this one (pixels), and the contraction the
+    // system showed on earlier runs, for `error_left`.
+    let mut previous_steps = [f64::INFINITY; 2];
+    let mut known = corr.contraction();
+    loop {
+        if used >= limits.budget {
+            return (Run::IterationLimit, used);
+        }
+        if used == DISPLACED_GRADIENT_ITERATIONS && corr.displaced_gradient() {
+            corr.use_reference_gradient();
+            relax = Relaxation::new(lambda.len());
+            known = None;
+        }
+        let s = match corr.iterate(lambda, sampler, config.polarity) {
+            Ok(s) => s,
+            Err(failure) => return (Run::Failed(divergence_of(failure)), used),
+        };
+        history.push(IterationRecord {
+            iteration: history.len(),
+            max_step: s.max_step,
+            residual_rms: s.residual_rms,
+            run: kind,
+            new_reference: kind == RunKind::Reference && used == 0,
+        });
+        used += 1;
+        *step = Some(s);
+        let omega = relax.factor(&corr.delta);
+        let scale = omega
+            * if omega * s.max_step > cap {
+                cap / (omega * s.max_step)
+            } else {
+                1.0
+            };
+        relax.applied(scale);
+        for (l, d) in lambda.iter_mut().zip(&corr.delta) {
+            *l += scale * d;
+        }
+        if previous_steps[1].is_finite() {
+            corr.observe_contraction(s.max_step / previous_steps[1]);
+        }
+        let left = error_left(s.max_step, previous_steps, known);
+        if s.max_step < limits.tolerance || left < limits.tolerance {
+            return (Run::Converged, used);
+        }
+        previous_steps = [previous_steps[1], s.max_step];
+        if lambda.iter().any(|l| l.abs() > limits.rereference) {
+            return (Run::Rereference, used);
+        }
+    }
+}
+
+/// The divergence a failed step means.
+fn divergence_of(failure: StepFailure) -> Divergence {
+    match failure {
+        StepFailure::LeftImage([x, y]) => Divergence::LeftImage { x, y },
+        StepFailure::NoContrast => Divergence::NoContrast,
+        StepFailure::NonFinite => Divergence::NonFinite,
+    }
+}
+
+/// The error (pixels) that remains once a step of `step` is applied, the
+/// two steps before it being `previous` (older first, infinite when the run
+/// has not made them) and `known` the slowest contraction the system
+/// showed on earlier runs (`Correlation::contraction`).
+///
+/// Gauss–Newton with a constant matrix contracts linearly: with `q` the
+/// larger ratio of the last three steps, the steps still to come add up to
+/// about `step q / (1 - q)`; taken twice for safety, and only once three
+/// steps show a good contraction (`q` under `FAST_CONTRACTION`), infinite
+/// otherwise. The contraction is a property of the system, not of the run:
+/// on a band that earlier runs showed to contract fast (a kept band's next
+/// frames, see `TrackCache`), two steps of the run suffice, `q` then being
+/// at least what those runs showed.
+pub(super) fn error_left(step: f64, previous: [f64; 2], known: Option<f64>) -> f64 {
+    let q = match (previous[0].is_finite(), known) {
+        (true, _) => (step / previous[1]).max(previous[1] / previous[0]),
+        (false, Some(k)) if previous[1].is_finite() => (step / previous[1]).max(k),
+        _ => return f64::INFINITY,
+    };
+    if q < FAST_CONTRACTION {
+        2.0 * step * q / (1.0 - q)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The largest change of the coefficients from `start` (from 0 without
+/// one), pixels: a bound on that of the displacement (the B-splines are a
+/// partition of unity).
+pub(super) fn largest_change(lambda: &[f64], start: Option<&[f64]>) -> f64 {
+    match start {
+        Some(start) => lambda
+            .iter()
+            .zip(start)
+            .fold(0.0, |m: f64, (l, s)| m.max((l - s).abs())),
+        None => lambda.iter().fold(0.0, |m: f64, l| m.max(l.abs())),
+    }
+}
+
+/// Scalar secant relaxation of the Gauss–Newton steps.
+///
+/// The step replaces the gradient of the physical image by the virtual
+/// one's, and models how the refitted gray levels follow a shift of the
+/// curve as if the physical edge had the virtual profile. When it has not (a
+/// sharp or blurred edge under a sine profile), the iteration is a linear
+/// contraction `d_(k+1) = (1 - w_k lambda) d_k` along its dominant mode, with
+/// `lambda` up to ~2 (oscillation) or under 1 (slow creep). The ratio of two
+/// successive steps measures `lambda`; the next factor is `w = 1 / lambda`
+/// (clamped to `[0.2, 3]`), which removes that mode in one more step. With a
+/// matched profile `lambda = 1` and `w` stays 1.
+struct Relaxation {
+    previous: Vec<f64>,
+    have_previous: bool,
+    omega: f64,
+    last_applied: f64,
+}
+
+impl Relaxation {
+    fn new(n: usize) -> Self {
+        Relaxation {
+            previous: vec![0.0; n],
+            have_previous: false,
+            omega: 1.0,
+            last_applied: 1.0,
+        }
+    }
+
+    /// The factor for the raw step `delta` (before the step-length cap).
+    fn factor(&mut self, delta: &[f64]) -> f64 {
+        if self.have_previous {
+            let (mut dot, mut norm) = (0.0, 0.0);
+            for (d, p) in delta.iter().zip(&self.previous) {
+                dot += d * p;
+                norm += p * p;
+            }
+            if norm > 0.0 {
+                let rho = dot / norm;
+                let lambda = (1.0 - rho) / self.last_applied;
+                if lambda.is_finite() && lambda > 1.0 / 3.0 {
+                    self.omega = (1.0 / lambda).clamp(0.2, 3.0);
+                }
+            }
+        }
+        self.previous.copy_from_slice(delta);
+        self.have_previous = true;
+        self.omega
+    }
+
+    /// Record the factor actually applied (after the cap).
+    fn applied(&mut self, factor: f64) {
+        self.last_applied = factor;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INF: f64 = f64::INFINITY;
+
+    /// The steps of a linear contraction by `q` from a first step `first`.
+    fn steps(first: f64, q: f64, n: usize) -> Vec<f64> {
+        (0..n).map(|k| first * q.powi(k as i32)).collect()
+    }
+
+    #[test]
+    fn two_steps_need_a_known_contraction() {
+        let s = steps(5e-2, 0.01, 2);
+        // Nothing known: two steps say nothing yet.
+        assert_eq!(error_left(s[1], [INF, s[0]], None), INF);
+        // A known fast contraction: twice `step q / (1 - q)`, with `q` the
+        // slower of the known one and the run's own ratio.
+        let left = error_left(s[1], [INF, s[0]], Some(0.03));
+        assert!((left - 2.0 * s[1] * 0.03 / 0.97).abs() < 1e-18, "{left}");
+        let left = error_left(s[1], [INF, s[0]], Some(0.001));
+        assert!((left - 2.0 * s[1] * 0.01 / 0.99).abs() < 1e-18, "{left}");
+        // A known slow one, or a run slower than `FAST_CONTRACTION`: none.
+        assert_eq!(error_left(s[1], [INF, s[0]], Some(0.3)), INF);
+        assert_eq!(error_left(0.3 * s[0], [INF, s[0]], Some(0.01)), INF);
+        // A first step: nothing to compare it with.
+        assert_eq!(error_left(s[0], [INF, INF], Some(0.01)), INF);
+    }
+
+    #[test]
+    fn three_steps_go_by_the_run_alone() {
+        let s = steps(0.37, 0.03, 3);
+        let own = error_left(s[2], [s[0], s[1]], None);
+        assert!((own - 2.0 * s[2] * 0.03 / 0.97).abs() < 1e-15, "{own}");
+        for known in [Some(0.001), Some(0.2), Some(0.9)] {
+            assert_eq!(error_left(s[2], [s[0], s[1]], known), own);
+        }
+    }
+
+    /// Whenever the contraction is as fast as the estimate assumes (every
+    /// ratio at most the larger of the known one and the run's), the error
+    /// left (the sum of the steps still to come) is under the estimate.
+    #[test]
+    fn the_estimate_bounds_a_linear_contraction() {
+        for q in [0.001, 0.01, 0.05, 0.1, 0.2, 0.24] {
+            for known in [q, 1.5 * q, 0.24] {
+                let s = steps(0.1, q, 40);
+                let left: f64 = s[2..].iter().sum();
+                let estimate = error_left(s[1], [INF, s[0]], Some(known));
+                assert!(
+                    left <= estimate,
+                    "q {q}, known {known}: {left} > {estimate}"
+                );
+                let left: f64 = s[3..].iter().sum();
+                assert!(left <= error_left(s[2], [s[0], s[1]], None), "q {q}");
+            }
+        }
+    }
+}

@@ -1,0 +1,384 @@
+//! The schedule (method, section 6): the stages in turn, coarse to fine,
+//! each stage's result the next one's reference; after the last stage,
+//! the edge's blur chooses a stage to append (the pixel edge through that
+//! blur for a silhouette, a band matched to a wide line), and a tracked
+//! frame's band is kept for the next frame.
+
+use super::blur::{
+    estimate_spread, matched_band, pixel_edge_band, BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
+};
+use super::output::{plain_samples, Final, Output};
+use super::reference::{next_reference, Clip, CURVE_SPACING};
+use super::run::largest_change;
+use super::track::{self, TrackCache, TrackState};
+use super::{
+    breaks, default_stages, Elements, FitConfig, Measurement, Outcome, Stage, StageReport,
+};
+use crate::curve::SplineCurve;
+use crate::error::{Error, Result};
+use crate::interp::Sampler;
+use crate::psf;
+use crate::virtual_image::{Kind, Profile};
+use std::f64::consts::TAU;
+
+/// Run the schedule of `config` from `reference`; with `tracked`, the
+/// tracking schedule instead (the pixel-edge stage alone, see
+/// [`super::track`]), on the band the cache keeps when it serves, and the
+/// cache updated after it.
+///
+/// Runs on a thread of rayon's pool (the caller's own when it is one): a
+/// fit has tens of parallel loops, each a fraction of a millisecond, and
+/// called from outside the pool each would hand its work over to the pool
+/// and put the caller to sleep until it is done.
+pub(super) fn run_schedule(
+    sampler: &Sampler,
+    reference: SplineCurve,
+    config: &FitConfig,
+    tracked: Option<(TrackState, &mut TrackCache)>,
+) -> Result<Measurement> {
+    rayon::scope(|_| run_schedule_here(sampler, reference, config, tracked))
+}
+
+/// [`run_schedule`] on the calling thread.
+fn run_schedule_here(
+    sampler: &Sampler,
+    reference: SplineCurve,
+    config: &FitConfig,
+    tracked: Option<(TrackState, &mut TrackCache)>,
+) -> Result<Measurement> {
+    let (tracked, mut cache) = match tracked {
+        Some((t, c)) => (Some(t), Some(c)),
+        None => (None, None),
+    };
+    config.validate()?;
+    if sampler.kind() != config.interpolation {
+        return Err(Error::invalid(
+            "interpolation",
+            "the sampler was prepared for another interpolation than the configuration's",
+        ));
+    }
+    let mut schedule = Schedule::new(sampler, reference, config, tracked, cache.as_deref_mut())?;
+    schedule.run()?;
+    schedule.finish(cache)
+}
+
+/// How a stage ended, for the schedule.
+pub(super) enum Flow {
+    /// It completed: its result is the schedule's last.
+    Completed,
+    /// It was skipped (the reason recorded): on to the next stage.
+    Skipped,
+    /// The schedule ends here (a failure, or an optional stage that could
+    /// not run: the previous result stands).
+    Stop,
+}
+
+/// The state of a fit across its stages.
+pub(super) struct Schedule<'s> {
+    /// The image.
+    pub sampler: &'s Sampler,
+    /// The configuration; its level model may be downgraded to the global
+    /// pair on the way (see `Correlation::levels_significant`).
+    pub config: FitConfig,
+    /// What a tracked frame takes from the previous one.
+    pub tracked: Option<TrackState>,
+    /// Whether the schedule is the default (or tracking) one: stages may be
+    /// skipped, settled and appended.
+    pub auto: bool,
+    /// The stages, with those appended after the last one.
+    pub stages: Vec<Stage>,
+    /// Fewest elements of a displacement basis on this curve.
+    pub min_el: usize,
+    /// Margin of a tracked frame's new band, pixels.
+    pub track_margin: f64,
+    /// The current reference curve.
+    pub current: SplineCurve,
+    /// Tracking: the band the previous frame left, when it serves this one.
+    pub reuse: Option<Box<track::Kept>>,
+    /// Tracking: where the previous frame's curve is on the current band
+    /// (its displacement).
+    pub run_start: Option<Vec<f64>>,
+    /// Tracking: how far the curve moved on the frame's earlier bands
+    /// (pixels, the sum of their largest displacements: a bound; none when
+    /// the frame measured on one band).
+    pub moved_before: Option<f64>,
+    /// The completed (or failed) stages' reports.
+    pub reports: Vec<StageReport>,
+    /// Stages skipped, with the reason.
+    pub skipped: Vec<String>,
+    /// The last completed stage.
+    pub last: Option<Final>,
+    /// How the fit ends so far.
+    pub outcome: Outcome,
+    /// The edge's blur, estimated after the last stage.
+    pub edge_spread: Option<psf::EdgeSpread>,
+    /// Whether a stage matched to the edge's blur was appended (once; a
+    /// tracked schedule's one stage is that pixel-edge stage).
+    pub matched_added: bool,
+    /// The profile of that stage when it is a silhouette's pixel edge.
+    pub pixel_edge: Option<Profile>,
+}
+
+impl<'s> Schedule<'s> {
+    /// The schedule of `config` (or of `tracked`) from `reference`, with the
+    /// tracking cache's band when it serves.
+    fn new(
+        sampler: &'s Sampler,
+        reference: SplineCurve,
+        config: &FitConfig,
+        tracked: Option<TrackState>,
+        mut cache: Option<&mut TrackCache>,
+    ) -> Result<Self> {
+        let config = config.clone();
+        let closed = reference.is_closed();
+        let (stages, auto) = match (&config.stages, tracked) {
+            (_, Some(t)) => (vec![t.stage()], true),
+            (Some(s), None) => (s.clone(), false),
+            (None, None) => (default_stages(), true),
+        };
+        let min_el = if closed { config.degree + 1 } else { 1 };
+        let mut current = breaks::prepare(reference, &config.breaks)?;
+        let reuse = match (tracked, cache.as_deref_mut()) {
+            (Some(t), Some(c)) => c.take_for(&t, config.levels, sampler, config.coords),
+            _ => None,
+        };
+        let track_margin = cache
+            .as_deref()
+            .map_or(track::TRACK_MARGIN, TrackCache::margin);
+        match (tracked, &reuse) {
+            // A kept band's reference was refitted when the band was built.
+            (Some(_), Some(kept)) => current = kept.reference.clone(),
+            (Some(t), None) => {
+                let clip = Clip {
+                    half_width: t.stage().half_width + track_margin,
+                    width: sampler.width(),
+                    height: sampler.height(),
+                };
+                current = tracked_reference(&current, &t.stage(), &config, min_el, clip)?;
+            }
+            (None, _) => {}
+        }
+        Ok(Schedule {
+            sampler,
+            tracked,
+            auto,
+            stages,
+            min_el,
+            track_margin,
+            current,
+            reuse,
+            run_start: None,
+            moved_before: None,
+            reports: Vec::new(),
+            skipped: Vec::new(),
+            last: None,
+            outcome: Outcome::Converged,
+            edge_spread: None,
+            matched_added: tracked.is_some(),
+            pixel_edge: tracked.map(|t| t.profile()),
+            config,
+        })
+    }
+
+    /// Run the stages in turn, appending those the edge's blur calls for.
+    fn run(&mut self) -> Result<()> {
+        let mut next = 0;
+        while next < self.stages.len() {
+            let k = next;
+            next += 1;
+            let stage = self.stages[k];
+            let is_last = k + 1 == self.stages.len();
+            if self.auto && !is_last && self.too_wide(&stage) {
+                continue;
+            }
+            match self.run_stage(&stage, is_last)? {
+                Flow::Completed if is_last => self.append_matched(&stage),
+                Flow::Completed | Flow::Skipped => {}
+                Flow::Stop => break,
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether a coarse stage's band is too wide for the curve (then it is
+    /// skipped, the reason recorded).
+    fn too_wide(&mut self, stage: &Stage) -> bool {
+        let r = stage.half_width;
+        let length = self.current.arc_length();
+        let size = if self.current.is_closed() {
+            length / TAU
+        } else {
+            length
+        };
+        if r > 0.5 * size {
+            self.skipped.push(format!(
+                "R = {r} px: too wide for a curve of length {length:.1} px"
+            ));
+            return true;
+        }
+        false
+    }
+
+    /// After the last stage: estimate the edge's blur on the measured
+    /// curve and, with the default schedule, measure once more with a
+    /// profile matched to it: for a silhouette the pixel edge through that
+    /// blur (exact, see `Profile::PixelEdge`); for a line much wider than
+    /// the last band, a band matched to it (the paper's optimum,
+    /// `R_g = R_f`), where the blur correction is exact.
+    fn append_matched(&mut self, stage: &Stage) {
+        if !self.config.blur_correction || self.tracked.is_some() {
+            return;
+        }
+        let r = stage.half_width;
+        self.edge_spread = estimate_spread(self.sampler, &self.current, self.config.kind);
+        let chosen = self.last.as_ref().map(|f| f.corr.basis.element_length());
+        if let (Some(e), Some(chosen), true, false) =
+            (self.edge_spread, chosen, self.auto, self.matched_added)
+        {
+            let good = e.fit_quality >= MIN_EDGE_FIT_QUALITY;
+            let matched = (matched_band(&e) * 2.0).round() / 2.0;
+            if good && self.config.kind == Kind::Silhouette {
+                // Starting from the elements the last stage chose, and
+                // refining further when that stage could (its sine profile
+                // may have stopped on aliasing, which the pixel edge does
+                // not have).
+                let elements = match stage.elements {
+                    Elements::Auto { shortest, .. } => Elements::Auto {
+                        longest: chosen,
+                        shortest,
+                    },
+                    _ => Elements::Length(chosen),
+                };
+                let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
+                self.matched_added = true;
+                self.pixel_edge = Some(Profile::PixelEdge { blur });
+                self.stages.push(Stage {
+                    half_width: pixel_edge_band(blur),
+                    elements,
+                });
+            } else if good && matched > BAND_MISMATCH * r {
+                self.matched_added = true;
+                self.stages.push(Stage {
+                    half_width: matched,
+                    elements: Elements::Length(chosen),
+                });
+            }
+        }
+        // A silhouette's last stage left its settling to a pixel-edge stage
+        // that is not coming (no edge spread: an edge within a few pixels of
+        // the image border; or an edge that is not a blurred step: texture,
+        // clutter). Run it once more, this time settling (its profile stays
+        // the sine, as `pixel_edge` is unset), so that detail finer than the
+        // elements, such as a traced start's staircase, does not stay in
+        // the result.
+        if let (Some(chosen), true, false, Kind::Silhouette) =
+            (chosen, self.auto, self.matched_added, self.config.kind)
+        {
+            self.matched_added = true;
+            self.stages.push(Stage {
+                half_width: r,
+                elements: Elements::Length(chosen),
+            });
+        }
+    }
+
+    /// The measurement: the last completed stage's curve and samples (the
+    /// start's when no stage completed), and the tracking cache updated.
+    fn finish(mut self, cache: Option<&mut TrackCache>) -> Result<Measurement> {
+        let Some(fin) = self.last.take() else {
+            // Not even one stage completed: report the start as the result.
+            return Ok(Measurement {
+                edge_spread: None,
+                blur_corrected: false,
+                outcome: self.outcome,
+                curve_fit_error: 0.0,
+                samples: plain_samples(&self.current, self.config.sample_spacing),
+                curve: self.current,
+                stages: self.reports,
+                skipped: self.skipped,
+                levels: Vec::new(),
+            });
+        };
+        // The blur's curvature shift: removed when the edge (or line) looks
+        // like a blurred step (or bar) and the last band is not much
+        // narrower than it (a narrow band sees only the middle of a wide
+        // edge, and stays between the half-level and the boundary). A
+        // pixel-edge profile models the shift already.
+        let pixel_edge_result = matches!(fin.profile, Profile::PixelEdge { .. });
+        let blur = self
+            .edge_spread
+            .filter(|_| !pixel_edge_result)
+            .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
+            .filter(|e| matched_band(e) <= BAND_MISMATCH * fin.half_width)
+            .map(|e| e.sigma);
+        let Output {
+            curve,
+            fit_error,
+            samples,
+            levels,
+        } = fin.samples(self.config.sample_spacing, self.config.degree.max(3), blur)?;
+        if let Some(cache) = cache {
+            self.keep_band(fin, cache);
+        }
+        Ok(Measurement {
+            outcome: self.outcome,
+            curve,
+            curve_fit_error: fit_error,
+            samples,
+            stages: self.reports,
+            skipped: self.skipped,
+            edge_spread: self.edge_spread,
+            blur_corrected: blur.is_some() || pixel_edge_result,
+            levels,
+        })
+    }
+
+    /// Tracking: the frame's last band, kept for the next frame (see
+    /// `TrackCache`), with how far the curve moved; not after a robust
+    /// reweighting (the weights would carry over).
+    fn keep_band(&self, fin: Final, cache: &mut TrackCache) {
+        let motion = self.run_start.as_deref().map(|start| {
+            self.moved_before.unwrap_or(0.0) + largest_change(&fin.lambda, Some(start))
+        });
+        // How the curve moved on its one band, if it did on one.
+        let velocity = match (&self.run_start, self.moved_before) {
+            (Some(start), None) => Some(fin.lambda.iter().zip(start).map(|(l, s)| l - s).collect()),
+            _ => None,
+        };
+        let keep = self.outcome == Outcome::Converged
+            && motion.is_some()
+            && fin.corr.band.margin() > 0.0
+            && !fin.corr.reweighted();
+        let kept = keep.then(|| {
+            Box::new(track::Kept {
+                reference: fin.reference,
+                corr: fin.corr,
+                lambda: fin.lambda,
+                velocity,
+                levels: self.config.levels,
+                size: (self.sampler.width(), self.sampler.height()),
+            })
+        });
+        cache.update(kept, motion);
+    }
+}
+
+/// A tracked frame's reference: the previous frame's curve refitted with
+/// control points one element of the tracking stage apart, as a settle's
+/// would be (a tracked frame's run does not settle, see
+/// `track::TRACK_MARGIN`). The displacement cannot remove detail finer
+/// than its elements, which would otherwise stay in the result and pile up
+/// from frame to frame.
+fn tracked_reference(
+    previous: &SplineCurve,
+    stage: &Stage,
+    config: &FitConfig,
+    min_el: usize,
+    clip: Clip,
+) -> Result<SplineCurve> {
+    let n = stage.element_count(previous.param_length(), min_el);
+    let basis = breaks::displacement_basis(previous, config.degree, n)?;
+    let spacing = basis.element_length().max(CURVE_SPACING);
+    let zero = vec![0.0; basis.n_functions()];
+    next_reference(previous, &basis, &zero, spacing, clip)
+}

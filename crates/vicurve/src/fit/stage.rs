@@ -1,0 +1,716 @@
+//! One stage of the schedule: runs of Gauss–Newton on a band of one
+//! half-width, each on a new reference, until the stage's result stands.
+//!
+//! A stage is a small state machine. Each run builds its band and system
+//! (or takes the tracking cache's), then iterates ([`super::run`]). A run
+//! that moves too far re-references. One that converges goes through
+//! the checks made once per stage (varying levels significant? elements
+//! refined, [`super::refine`]; clutter, [`super::robust`]), refits the
+//! pixel edge's blur ([`super::blur`]), and settles: the last stage of the
+//! default schedule re-references on its own result until the displacement
+//! vanishes, so that the result is a fixed point whatever the start. Then
+//! the stage is done, and its result the next stage's reference.
+
+use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
+use super::correlation::{Correlation, MeasuredTilt, Step};
+use super::output::Final;
+use super::reference::{next_reference, reference_spacing, Clip, CURVE_SPACING};
+use super::refine::{refine, Fitted, RefineBand};
+use super::robust::{robust_refit, RobustFit};
+use super::run::{iterate_to_end, largest_change, Run, RunLimits, RunLog};
+use super::schedule::{Flow, Schedule};
+use super::track;
+use super::{
+    breaks, Divergence, Elements, IterationRecord, LevelModel, Outcome, RunKind, Stage, StageReport,
+};
+use crate::band::Band;
+use crate::error::{Error, Result};
+use crate::spline::Basis;
+use crate::virtual_image::{Kind, Profile};
+use std::time::Instant;
+
+/// Re-references allowed within one stage before it is declared stuck.
+const MAX_REREFERENCES: usize = 100;
+/// The last stage of the default schedule re-references until its
+/// displacement is under this, pixels (see [`StageState::settles`]): a
+/// settling re-reference moves the result by a few percent of the
+/// displacement it re-references on, so a tighter tolerance changes the
+/// result by less than the noise and costs runs that no longer contract
+/// (docs/benchmarks.md gives the measurements).
+const SETTLE_TOLERANCE: f64 = 0.02;
+/// A settle whose displacement is not under this fraction of the previous
+/// run's (with the same profile) does not contract: noise, not shape,
+/// drives it, and the stage stops. Only for displacements under
+/// `SETTLE_NOISE_CHECK` times `SETTLE_TOLERANCE`: larger ones are a shape
+/// the elements cannot follow (a corner without a break), which settles
+/// to `MAX_SETTLES`.
+const SETTLE_CONTRACTION: f64 = 0.5;
+/// See [`SETTLE_CONTRACTION`].
+const SETTLE_NOISE_CHECK: f64 = 5.0;
+/// Settling re-references of the last stage, at most.
+const MAX_SETTLES: usize = 4;
+/// A run of the last stage that a settle is sure to follow (its first)
+/// stops after a step under this (pixels) instead of
+/// [`super::FitConfig::tolerance`]: it only places the settle's reference, and the
+/// settle's result moves by a few percent of the reference's error, the
+/// error [`SETTLE_TOLERANCE`] accepts of the settles themselves.
+const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
+/// Iteration records reserved per stage at most (see
+/// [`StageReport::history`]): the loop pushes without allocating up to here.
+const HISTORY_RESERVE: usize = 1024;
+
+/// What one stage knows across its runs.
+pub(super) struct StageState {
+    /// The stage.
+    stage: Stage,
+    /// Whether it is the schedule's last (so far).
+    is_last: bool,
+    /// Whether it is the stage appended after the last one.
+    appended: bool,
+    /// Whether a pixel-edge stage will follow it (a silhouette's stage
+    /// then leaves the settling to that one).
+    followed: bool,
+    /// An open curve's new references keep their band inside the image.
+    clip: Clip,
+    /// When the stage started.
+    started: Instant,
+    /// Iterations so far.
+    iterations: usize,
+    /// New references so far.
+    rereferences: usize,
+    /// The last successful step.
+    step: Option<Step>,
+    /// Runs with a refitted blur so far.
+    blur_updates: usize,
+    /// Tracking: once a refit of the blur confirms the one in use, the
+    /// stage's settling runs do not refit it again.
+    blur_confirmed: bool,
+    /// Once the last stage has chosen its elements, re-runs keep them.
+    fixed_elements: Option<usize>,
+    /// Settling re-references so far.
+    settles: usize,
+    /// Decided once per stage, on its first converged run (the runs after
+    /// it re-reference the same image a fraction of a pixel away): whether
+    /// varying levels are significant...
+    levels_tested: bool,
+    /// ...whether the band holds clutter (`None`: not yet probed)...
+    cluttered: Option<bool>,
+    /// ...and the image noise (variance, gray levels squared).
+    stage_noise: Option<f64>,
+    /// The light's tilt, measured on the stage's first reference.
+    tilt: Option<MeasuredTilt>,
+    /// The largest displacement of the run before this one, pixels.
+    previous_move: f64,
+    /// The stage's iterations.
+    history: Vec<IterationRecord>,
+}
+
+impl StageState {
+    /// The report of the stage, ending with `outcome`, on `basis` and a
+    /// band of `band_pixels`; its history is moved into it.
+    fn report(
+        &mut self,
+        profile: Profile,
+        basis: &Basis,
+        band_pixels: usize,
+        outcome: Outcome,
+    ) -> StageReport {
+        StageReport {
+            half_width: self.stage.half_width,
+            profile,
+            elements: basis.n_elements(),
+            iterations: self.iterations,
+            rereferences: self.rereferences,
+            band_pixels,
+            residual_rms: self.step.map_or(f64::NAN, |s| s.residual_rms),
+            a: self.step.map_or(f64::NAN, |s| s.a),
+            c: self.step.map_or(f64::NAN, |s| s.c),
+            seconds: self.started.elapsed().as_secs_f64(),
+            outcome,
+            history: std::mem::take(&mut self.history),
+        }
+    }
+}
+
+/// After one run: another, or the stage's end.
+enum Next {
+    /// Another run, on the new reference.
+    Again,
+    /// The stage ends.
+    Exit(Flow),
+}
+
+/// One run's system and what it was made of.
+struct RunSystem {
+    /// The system.
+    corr: Correlation,
+    /// The displacement basis the run started with.
+    basis: Basis,
+    /// Its virtual profile.
+    profile: Profile,
+    /// The pushed (pixel-edge) profile, when the run has one.
+    pushed: Option<Profile>,
+    /// Pixels of its band.
+    band_pixels: usize,
+    /// Its convergence tolerance, pixels.
+    tolerance: f64,
+    /// Whether its band has a margin (a tracked band: no settle).
+    windowed: bool,
+}
+
+impl Schedule<'_> {
+    /// Run `stage` (`is_last`: the schedule's last so far) until it
+    /// completes, is skipped or fails.
+    pub(super) fn run_stage(&mut self, stage: &Stage, is_last: bool) -> Result<Flow> {
+        let r = stage.half_width;
+        let config = &self.config;
+        let mut st = StageState {
+            stage: *stage,
+            is_last,
+            appended: self.matched_added && is_last,
+            followed: config.kind == Kind::Silhouette
+                && config.blur_correction
+                && !self.matched_added,
+            clip: Clip {
+                half_width: r,
+                width: self.sampler.width(),
+                height: self.sampler.height(),
+            },
+            started: Instant::now(),
+            iterations: 0,
+            rereferences: 0,
+            step: None,
+            blur_updates: 0,
+            blur_confirmed: false,
+            fixed_elements: None,
+            settles: 0,
+            levels_tested: false,
+            cluttered: None,
+            stage_noise: None,
+            tilt: None,
+            previous_move: f64::INFINITY,
+            history: Vec::with_capacity(config.max_iterations.min(HISTORY_RESERVE)),
+        };
+        loop {
+            if let Next::Exit(flow) = self.one_run(&mut st)? {
+                return Ok(flow);
+            }
+        }
+    }
+
+    /// One run of the stage: its system, its iterations, and what follows.
+    fn one_run(&mut self, st: &mut StageState) -> Result<Next> {
+        let r = st.stage.half_width;
+        // The pushed pixel-edge profile is only ever the appended stage's.
+        let pushed = if st.appended { self.pixel_edge } else { None };
+        let profile = pushed.unwrap_or(Profile::Paper {
+            kind: self.config.kind,
+        });
+        // A kept band serves the frame's first run.
+        let reused = match (st.iterations, st.rereferences) {
+            (0, 0) => self.reuse.take(),
+            _ => None,
+        };
+        let (mut corr, basis, band_pixels, kept) = match reused {
+            Some(kept) => {
+                let track::Kept {
+                    mut corr,
+                    lambda,
+                    velocity,
+                    ..
+                } = *kept;
+                let basis = corr.basis.clone();
+                corr.reload(self.sampler)?;
+                let pixels = corr.band.len();
+                (corr, basis, pixels, Some((lambda, velocity)))
+            }
+            None => {
+                let length = self.current.param_length();
+                let n_elements = st
+                    .fixed_elements
+                    .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
+                let basis =
+                    breaks::displacement_basis(&self.current, self.config.degree, n_elements)?;
+                match self.build_system(st, &basis, profile, pushed)? {
+                    Ok((corr, pixels)) => (corr, basis, pixels, None),
+                    Err(flow) => return Ok(Next::Exit(flow)),
+                }
+            }
+        };
+        let mut lambda = self.start_run(st, &mut corr, kept);
+        // A band with a margin needs no settle (see `track::TRACK_MARGIN`).
+        let windowed = corr.band.margin() > 0.0;
+        // A run that a settle is sure to follow only places its reference.
+        let pre_settle = self.auto && st.is_last && !st.followed && st.settles == 0 && !windowed;
+        let tolerance = if pre_settle {
+            self.config.tolerance.max(PRE_SETTLE_TOLERANCE)
+        } else {
+            self.config.tolerance
+        };
+        // A windowed band serves displacements within its margin.
+        let rereference = if st.rereferences >= MAX_REREFERENCES {
+            f64::INFINITY
+        } else if windowed {
+            corr.band.margin()
+        } else {
+            self.config.rereference_fraction * r
+        };
+        let limits = RunLimits {
+            budget: self.config.max_iterations.saturating_sub(st.iterations),
+            tolerance,
+            rereference,
+            half_width: r,
+        };
+        let before = st.history.len();
+        let (end, used) = iterate_to_end(
+            &mut corr,
+            &mut lambda,
+            self.sampler,
+            &self.config,
+            limits,
+            &mut st.step,
+            RunLog {
+                history: &mut st.history,
+                kind: RunKind::Reference,
+            },
+        );
+        st.iterations += used;
+        // Tracking: a step beyond the band's half-width means that the band
+        // does not see the edge (the start is too far from it, or the
+        // iteration went astray); the frame is for the full schedule, whose
+        // wide bands do, rather than for a chase that ends wherever the
+        // steps happen to land.
+        let lost = self.tracked.is_some() && st.history[before..].iter().any(|h| h.max_step > r);
+        let end = if lost {
+            Run::Failed(Divergence::NoContrast)
+        } else {
+            end
+        };
+        let system = RunSystem {
+            corr,
+            basis,
+            profile,
+            pushed,
+            band_pixels,
+            tolerance,
+            windowed,
+        };
+        match end {
+            Run::Rereference => {
+                let spacing = reference_spacing(&system.corr.basis);
+                self.move_reference(st, &system.corr.basis, &lambda, spacing)?;
+                Ok(Next::Again)
+            }
+            Run::Failed(divergence) if st.appended => {
+                self.skipped
+                    .push(format!("R = {r} px (matched to the blur): {divergence}"));
+                Ok(Next::Exit(Flow::Stop))
+            }
+            Run::Failed(divergence) => {
+                let RunSystem {
+                    corr,
+                    profile,
+                    band_pixels,
+                    ..
+                } = system;
+                self.fail(st, divergence, (profile, &corr.basis, band_pixels));
+                Ok(Next::Exit(Flow::Stop))
+            }
+            Run::Converged => self.end_run(st, Outcome::Converged, system, lambda),
+            Run::IterationLimit => self.end_run(st, Outcome::IterationLimit, system, lambda),
+        }
+    }
+
+    /// The band and system of a new run on the current reference, or how
+    /// the stage ends when it cannot be built.
+    fn build_system(
+        &mut self,
+        st: &mut StageState,
+        basis: &Basis,
+        profile: Profile,
+        pushed: Option<Profile>,
+    ) -> Result<std::result::Result<(Correlation, usize), Flow>> {
+        let r = st.stage.half_width;
+        let first_band = self.last.is_none() && st.iterations == 0;
+        // Coarse stages (all but the last) only bring the curve near the
+        // edge: half the pixels do that, a quarter in bands of 16 px or
+        // more (at least 8 pixels across per unit of length).
+        let thin = match (st.is_last, r >= 16.0) {
+            (true, _) => 1,
+            (false, false) => 2,
+            (false, true) => 4,
+        };
+        // A tracked frame's band has a margin, so that its one run counts
+        // the pixels around the edge whatever the reference (see
+        // `track::TRACK_MARGIN`); where that band does not fit in the
+        // image, the plain one settles as the full schedule does.
+        let margin = match (self.tracked, pushed) {
+            (Some(_), Some(_)) => self.track_margin,
+            _ => 0.0,
+        };
+        let (width, height) = (self.sampler.width(), self.sampler.height());
+        let coords = self.config.coords;
+        let current = &self.current;
+        let plain = || Band::build_with(current, basis, r, profile, width, height, thin, coords);
+        let built = if margin > 0.0 {
+            Band::build_windowed(current, basis, r, margin, profile, width, height, coords)
+                .or_else(|_| plain())
+        } else {
+            plain()
+        };
+        let band = match built {
+            Ok(b) => b,
+            Err(e @ (Error::BandOutsideImage { .. } | Error::CurveOutsideImage { .. })) => {
+                return self
+                    .band_outside(st, e, (profile, basis), first_band)
+                    .map(Err);
+            }
+            Err(e) => return Err(e),
+        };
+        let band_pixels = band.len();
+        let prepared = Correlation::prepare(
+            band,
+            basis.clone(),
+            self.sampler,
+            self.config.levels,
+            st.tilt.as_ref(),
+        );
+        match prepared {
+            Ok(c) => Ok(Ok((c, band_pixels))),
+            Err(e) if first_band => Err(e),
+            Err(e) if st.appended => {
+                self.skipped
+                    .push(format!("R = {r} px (matched to the blur): {e}"));
+                Ok(Err(Flow::Stop))
+            }
+            Err(_) => {
+                self.fail(st, Divergence::Degenerate, (profile, basis, band_pixels));
+                Ok(Err(Flow::Stop))
+            }
+        }
+    }
+
+    /// How the stage ends when its band leaves the image (`e`): an error on
+    /// the fit's first band; a skip for an optional or coarse stage; a
+    /// divergence otherwise.
+    fn band_outside(
+        &mut self,
+        st: &mut StageState,
+        e: Error,
+        (profile, basis): (Profile, &Basis),
+        first_band: bool,
+    ) -> Result<Flow> {
+        let r = st.stage.half_width;
+        if st.appended && st.iterations == 0 {
+            // The matched band does not fit: keep the result.
+            self.skipped
+                .push(format!("R = {r} px (matched to the edge's blur): {e}"));
+            return Ok(Flow::Skipped);
+        }
+        if first_band && self.auto && !st.is_last {
+            self.skipped.push(format!("R = {r} px: {e}"));
+            return Ok(Flow::Skipped);
+        }
+        if first_band {
+            return Err(e);
+        }
+        if st.appended {
+            // An optional refinement: the previous result stands.
+            self.skipped
+                .push(format!("R = {r} px (matched to the blur): {e}"));
+            return Ok(Flow::Stop);
+        }
+        let (x, y) = match e {
+            Error::BandOutsideImage { x, y, .. } | Error::CurveOutsideImage { x, y, .. } => (x, y),
+            _ => (f64::NAN, f64::NAN),
+        };
+        self.fail(st, Divergence::LeftImage { x, y }, (profile, basis, 0));
+        Ok(Flow::Stop)
+    }
+
+    /// The fit diverged: the outcome and the stage's report say how.
+    fn fail(
+        &mut self,
+        st: &mut StageState,
+        divergence: Divergence,
+        (profile, basis, band_pixels): (Profile, &Basis, usize),
+    ) {
+        self.outcome = Outcome::Diverged { divergence };
+        let report = st.report(profile, basis, band_pixels, self.outcome);
+        self.reports.push(report);
+    }
+
+    /// The coefficients a run starts from (zero, or a kept band's
+    /// displacement moved on as it moved last), with the stage's noise,
+    /// clutter and tilt carried into the system.
+    fn start_run(
+        &mut self,
+        st: &mut StageState,
+        corr: &mut Correlation,
+        kept: Option<(Vec<f64>, Option<Vec<f64>>)>,
+    ) -> Vec<f64> {
+        if corr.noise_var.is_none() {
+            corr.noise_var = st.stage_noise;
+        }
+        // A cluttered band's fits (its reweighted ones, and the stage's
+        // later runs) keep the reference's profile derivative in their
+        // gradient (`Correlation::use_reference_gradient`): with the
+        // displaced one the weights follow the clutter's residuals, which
+        // are far beyond the noise (docs/benchmarks.md).
+        if st.cluttered == Some(true) {
+            corr.use_reference_gradient();
+        }
+        st.tilt = corr.measured_tilt().cloned();
+        let mut lambda = vec![0.0; corr.n_unknowns()];
+        if let Some((kept, velocity)) = kept {
+            // The previous frame's curve, moved on as it moved last (see
+            // `TrackCache`). The blur stands as the band's first frame
+            // fitted it: a sequence's blur changes slowly, and the next band
+            // (a few frames on) fits it again.
+            st.blur_confirmed = true;
+            lambda.clone_from(&kept);
+            for (l, v) in lambda.iter_mut().zip(velocity.iter().flatten()) {
+                *l += v;
+            }
+            // The profile on the curvature of that curve, as a band built
+            // on it would have (see `band`).
+            corr.band.bend_to(&corr.basis, &lambda);
+            self.run_start = Some(kept);
+        } else if self.tracked.is_some() {
+            self.run_start = Some(lambda.clone());
+        }
+        lambda
+    }
+
+    /// A new reference `x0 + U n`, control points `spacing` apart, for the
+    /// stage's next run; tracking records how far the curve moved.
+    fn move_reference(
+        &mut self,
+        st: &mut StageState,
+        basis: &Basis,
+        lambda: &[f64],
+        spacing: f64,
+    ) -> Result<()> {
+        self.current = next_reference(&self.current, basis, lambda, spacing, st.clip)?;
+        st.rereferences += 1;
+        let moved = largest_change(lambda, self.run_start.as_deref());
+        self.moved_before = Some(self.moved_before.unwrap_or(0.0) + moved);
+        Ok(())
+    }
+
+    /// A run that converged (or reached its iteration limit, `o`): the
+    /// once-per-stage checks, the blur refit and the settle, then another
+    /// run or the stage's result.
+    fn end_run(
+        &mut self,
+        st: &mut StageState,
+        o: Outcome,
+        system: RunSystem,
+        mut lambda: Vec<f64>,
+    ) -> Result<Next> {
+        let RunSystem {
+            mut corr,
+            basis,
+            profile,
+            pushed,
+            band_pixels,
+            tolerance,
+            windowed,
+        } = system;
+        let r = st.stage.half_width;
+        self.outcome = o;
+        // Varying levels that explain no more than noise would are dropped
+        // (they cost precision): this stage runs once more with the global
+        // pair, and so do the next.
+        let test_levels = o == Outcome::Converged && !st.levels_tested;
+        st.levels_tested |= test_levels;
+        if test_levels && corr.varying_levels() && !corr.levels_significant(&lambda, self.sampler) {
+            self.config.levels = LevelModel::Global;
+            self.refit_global(st, (&mut corr, &mut lambda), &basis, tolerance);
+        }
+        let auto_elements = matches!(st.stage.elements, Elements::Auto { .. });
+        if let (Elements::Auto { shortest, .. }, Some(step), None) =
+            (st.stage.elements, st.step, st.fixed_elements)
+        {
+            let (refined, used) = refine(
+                &self.current,
+                Fitted { corr, lambda, step },
+                shortest,
+                self.sampler,
+                &self.config,
+                RefineBand {
+                    half_width: r,
+                    profile,
+                },
+                &mut st.history,
+            )?;
+            (corr, lambda, st.step) = (refined.corr, refined.lambda, Some(refined.step));
+            st.iterations += used;
+        }
+        if auto_elements {
+            st.fixed_elements = Some(corr.basis.n_elements());
+        }
+        if o == Outcome::Converged && st.cluttered != Some(false) {
+            let fit = RobustFit {
+                corr: &mut corr,
+                lambda: &mut lambda,
+                step: &mut st.step,
+            };
+            let (used, found) = robust_refit(fit, self.sampler, &self.config, r, &mut st.history);
+            st.iterations += used;
+            st.cluttered = Some(found);
+        }
+        // The noise of a clean band serves the stage's next runs (a
+        // cluttered one's estimate is made without the rejected pixels, on
+        // each run's own weights).
+        if st.cluttered == Some(false) && st.stage_noise.is_none() {
+            st.stage_noise = corr.noise_var;
+        }
+        let again = self.refit_blur(st, &corr, &lambda, (pushed, o));
+        let settle = self.settles(st, &lambda, o, windowed, again);
+        if again || settle {
+            let spacing = corr.basis.element_length().max(CURVE_SPACING);
+            self.move_reference(st, &corr.basis, &lambda, spacing)?;
+            st.settles += 1;
+            return Ok(Next::Again);
+        }
+        if let (None, Some(_)) = (corr.noise_var, st.step) {
+            corr.estimate_noise(&lambda, self.sampler);
+        }
+        // The next stage's reference, or the curve the edge's spread is
+        // measured on after the last stage; the tracking schedule's one
+        // stage needs neither.
+        let next = if self.tracked.is_some() && st.is_last {
+            None
+        } else {
+            let spacing = reference_spacing(&corr.basis);
+            Some(next_reference(
+                &self.current,
+                &corr.basis,
+                &lambda,
+                spacing,
+                st.clip,
+            )?)
+        };
+        let report = st.report(profile, &corr.basis, band_pixels, o);
+        self.reports.push(report);
+        self.last = Some(Final {
+            half_width: r,
+            profile,
+            reference: match next {
+                Some(next) => std::mem::replace(&mut self.current, next),
+                None => self.current.clone(),
+            },
+            corr,
+            lambda,
+        });
+        Ok(Next::Exit(Flow::Completed))
+    }
+
+    /// The run again with the global pair of levels (already set in the
+    /// configuration), from where it converged; kept when it converges.
+    fn refit_global(
+        &mut self,
+        st: &mut StageState,
+        (corr, lambda): (&mut Correlation, &mut Vec<f64>),
+        basis: &Basis,
+        tolerance: f64,
+    ) {
+        let band = corr.band.clone();
+        let Ok(mut global) =
+            Correlation::prepare(band, basis.clone(), self.sampler, self.config.levels, None)
+        else {
+            return;
+        };
+        let mut global_lambda = lambda.clone();
+        let mut global_step = None;
+        let limits = RunLimits {
+            budget: self.config.max_iterations,
+            tolerance,
+            rereference: f64::INFINITY,
+            half_width: st.stage.half_width,
+        };
+        let (end, used) = iterate_to_end(
+            &mut global,
+            &mut global_lambda,
+            self.sampler,
+            &self.config,
+            limits,
+            &mut global_step,
+            RunLog {
+                history: &mut st.history,
+                kind: RunKind::GlobalLevels,
+            },
+        );
+        st.iterations += used;
+        if let (Run::Converged, Some(_)) = (end, global_step) {
+            (*corr, *lambda, st.step) = (global, global_lambda, global_step);
+        }
+    }
+
+    /// The pixel edge's blur, fitted on the converged curve: whether it
+    /// changed enough for one more run with it (then the profile is
+    /// updated).
+    fn refit_blur(
+        &mut self,
+        st: &mut StageState,
+        corr: &Correlation,
+        lambda: &[f64],
+        (pushed, o): (Option<Profile>, Outcome),
+    ) -> bool {
+        let (Some(Profile::PixelEdge { blur }), Outcome::Converged) = (pushed, o) else {
+            return false;
+        };
+        if st.blur_updates >= MAX_BLUR_UPDATES || st.blur_confirmed {
+            return false;
+        }
+        let fitted = match self.tracked {
+            Some(_) => track::refit_blur(corr, lambda, blur),
+            None => fit_blur(corr, lambda, blur),
+        };
+        if (fitted - blur).abs() > BLUR_TOLERANCE {
+            self.pixel_edge = Some(Profile::PixelEdge { blur: fitted });
+            st.blur_updates += 1;
+            true
+        } else {
+            st.blur_confirmed = self.tracked.is_some();
+            false
+        }
+    }
+
+    /// Settle (default schedule, last stage): whether to re-reference on
+    /// the measured curve, refitted with control points one element apart,
+    /// because the displacement has not vanished yet. The result is then a
+    /// fixed point of the stage (to about `SETTLE_TOLERANCE`), whatever the
+    /// path that led there: two different starts give the same curve, and
+    /// detail finer than the elements that the start (a traced boundary, a
+    /// hand-drawn polyline) put in the reference, which the displacement
+    /// cannot remove, is gone. A pushed profile is also exact only at
+    /// `U = 0`. At least once: a wiggle finer than the elements leaves `U`
+    /// near 0. A silhouette's R = 2 px stage leaves this to the pixel-edge
+    /// stage that follows it. "Vanished": under `SETTLE_TOLERANCE`, or no
+    /// longer contracting. `again`: a run with a new blur follows anyway
+    /// (it starts a new comparison: its displacement comes from the
+    /// profile's change).
+    fn settles(
+        &self,
+        st: &mut StageState,
+        lambda: &[f64],
+        o: Outcome,
+        windowed: bool,
+        again: bool,
+    ) -> bool {
+        let moved = lambda.iter().fold(0.0, |m: f64, l| m.max(l.abs()));
+        let contracting = moved < SETTLE_CONTRACTION * st.previous_move
+            || moved >= SETTLE_NOISE_CHECK * SETTLE_TOLERANCE;
+        let settle = self.auto
+            && st.is_last
+            && !st.followed
+            && !windowed
+            && o == Outcome::Converged
+            && st.settles < MAX_SETTLES
+            && (st.settles == 0 || (moved > SETTLE_TOLERANCE && contracting));
+        st.previous_move = if again { f64::INFINITY } else { moved };
+        settle
+    }
+}
