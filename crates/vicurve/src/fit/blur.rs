@@ -2,7 +2,7 @@
 //! matched to the edge (the paper's optimum `R_g = R_f`) or the pixel-edge
 //! profile through that blur, whose own blur is then fitted on the band.
 
-use super::correlation::Correlation;
+use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::psf;

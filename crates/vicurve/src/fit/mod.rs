@@ -20,9 +20,7 @@
 mod blur;
 pub mod breaks;
 mod config;
-mod correlation;
 pub mod grow;
-pub mod levels;
 mod output;
 mod reference;
 mod refine;
@@ -33,8 +31,8 @@ mod schedule;
 mod stage;
 mod track;
 
+pub use crate::correlation::levels::{self, LevelModel};
 pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
-pub use levels::LevelModel;
 pub use result::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
 };

@@ -3,9 +3,9 @@
 //! and robust weight, and the gray levels along it.
 
 use super::breaks;
-use super::correlation::Correlation;
 use super::reference::{chord_lengths, CURVE_SPACING};
 use super::{LevelSample, Sample};
+use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::virtual_image::Profile;

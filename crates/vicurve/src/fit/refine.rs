@@ -2,10 +2,10 @@
 //! same reference while the finer curve differs from the coarser one by
 //! more than the noise explains.
 
-use super::correlation::{Correlation, Step};
 use super::run::{iterate_to_end, Run, RunLimits, RunLog};
 use super::{breaks, FitConfig, IterationRecord, RunKind};
 use crate::band::Band;
+use crate::correlation::{Correlation, Step};
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::interp::Sampler;

@@ -3,9 +3,9 @@
 //! Tukey's biweight, and the fit runs again (iteratively reweighted least
 //! squares).
 
-use super::correlation::{Correlation, Step};
 use super::run::{iterate_to_end, Run, RunLimits, RunLog};
 use super::{FitConfig, IterationRecord, RunKind};
+use crate::correlation::{Correlation, Step};
 use crate::interp::Sampler;
 use rayon::prelude::*;
 

@@ -3,8 +3,8 @@
 //! budget is spent, the displacement calls for a new reference, or a step
 //! fails.
 
-use super::correlation::{Correlation, Step, StepFailure};
 use super::{Divergence, FitConfig, IterationRecord, RunKind};
+use crate::correlation::{Correlation, Step, StepFailure};
 use crate::interp::Sampler;
 
 /// A run on one reference that has not converged after this many

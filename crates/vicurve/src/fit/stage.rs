@@ -12,7 +12,6 @@
 //! the stage is done, and its result the next stage's reference.
 
 use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
-use super::correlation::{Correlation, MeasuredTilt, Step};
 use super::output::Final;
 use super::reference::{next_reference, reference_spacing, Clip, CURVE_SPACING};
 use super::refine::{refine, Fitted, RefineBand};
@@ -24,6 +23,7 @@ use super::{
     breaks, Divergence, Elements, IterationRecord, LevelModel, Outcome, RunKind, Stage, StageReport,
 };
 use crate::band::Band;
+use crate::correlation::{Correlation, MeasuredTilt, Step};
 use crate::error::{Error, Result};
 use crate::spline::Basis;
 use crate::virtual_image::{Kind, Profile};

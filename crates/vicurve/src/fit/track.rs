@@ -45,9 +45,9 @@ mod cache;
 pub(super) use cache::Kept;
 pub use cache::{TrackCache, TrackSnapshot};
 
-use super::correlation::Correlation;
 use super::{measure_from, pixel_edge_band, run_schedule, Elements, FitConfig, Measurement, Stage};
 use super::{LevelModel, Outcome, StageReport, BLUR_FIT_PIXELS, BLUR_TOLERANCE};
+use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::image::Image;
@@ -249,11 +249,7 @@ pub fn measure_tracked(
 /// of two. A frame that moves further than the margin re-references on
 /// its way (a new band around the curve reached so far). The margin costs
 /// 15 % more band pixels at a blur of 1 px; a settle costs a second band.
-/// On the `track_speed` example's star (40 frames, moving 0.3 to 0.4 px
-/// per frame, 1 % noise), RMS error against the exact star with this
-/// margin and with the settle instead: 4.32e-3 and 4.74e-3 px at a blur
-/// of 0.5 px (8 bits), 4.33e-3 and 4.33e-3 px at 1 px, 2.36e-3 and
-/// 2.36e-3 px focused (16 bits, 20 frames).
+/// It is as accurate as the settle, or more (docs/benchmarks.md).
 pub(super) const TRACK_MARGIN: f64 = 0.5;
 
 /// Half-width of the bracket of [`refit_blur`]'s fallback search, pixels:

@@ -40,9 +40,9 @@
 
 use super::TrackState;
 use crate::band::Band;
+use crate::correlation::{Correlation, MeasuredTilt};
 use crate::curve::SplineCurve;
 use crate::error::Result;
-use crate::fit::correlation::{Correlation, MeasuredTilt};
 use crate::fit::{Coords, LevelModel};
 use crate::interp::Sampler;
 use crate::spline::Basis;
@@ -51,11 +51,7 @@ use serde::{Deserialize, Serialize};
 
 /// A new band's margin is this many times the last frame's motion (see
 /// the module docs): a curve moving steadily stays within it for four
-/// frames. Measured on the `track_speed` example's star (40 frames, blur
-/// 1 px), frames per second, each in turns with another: 2.1 times (two
-/// frames per band) 83-92 against 68-75 with a band per frame; 3.1 times
-/// 93-100 against 78-83 with a band per frame; 4.1 times 100-118 against
-/// 93-111 for 3.1 (early builds of the reuse, at different hours).
+/// frames (the factor's measurements: docs/benchmarks.md).
 pub(super) const REUSE_MOTIONS: f64 = 4.1;
 /// Largest margin of a tracked band, pixels: a curve moving faster gets a
 /// band of its own more often (a wider margin costs pixels in every

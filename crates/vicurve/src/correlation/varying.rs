@@ -1,5 +1,5 @@
 //! The iteration with gray levels that vary along the curve; see
-//! [`crate::fit::levels`] for the model and the one approximation.
+//! [`super::levels`] for the model and the one approximation.
 //!
 //! Two passes over the band per iteration: the first samples `f` (or
 //! evaluates the pushed profile), keeps `f` and `gamma` per pixel and
@@ -8,10 +8,10 @@
 //! right-hand side and the contrast averaged over each function's support.
 //! Nothing is allocated per iteration.
 
-use super::{Correlation, Step, StepFailure, MAX_OUTSIDE};
+use super::{left_image, polarity_sign, Correlation, Moments, Step, StepFailure};
 use crate::band::Band;
+use crate::correlation::levels::{features, LevelBasis};
 use crate::error::{Error, Result};
-use crate::fit::levels::{features, LevelBasis};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
@@ -378,15 +378,10 @@ impl Correlation {
                     s[5] += w * f * f;
                 }
             });
-        let outside: usize = var.chunks.iter().map(|a| a.outside_count).sum();
-        if outside > MAX_OUTSIDE.max(band.len() / 50) {
-            let q = var
-                .chunks
-                .iter()
-                .find_map(|a| a.outside)
-                .unwrap_or([f64::NAN; 2]);
-            return Err(StepFailure::LeftImage(q));
-        }
+        left_image(
+            var.chunks.iter().map(|a| (a.outside_count, a.outside)),
+            band.len(),
+        )?;
         let mut sums = [0.0; 9];
         var.t.fill(0.0);
         if pushed.is_some() {
@@ -405,27 +400,27 @@ impl Correlation {
         }
         // The global pair, for the polarity and contrast checks.
         let [n, sf, sg, sgg, sfg, sff, ..] = sums;
-        let det = n * sgg - sg * sg;
-        let a_global = (sgg * sf - sg * sfg) / det;
-        let c_global = (n * sfg - sg * sf) / det;
-        let var_f = (sff / n - (sf / n).powi(2)).max(0.0);
+        let m = Moments {
+            n,
+            sf,
+            sg,
+            sgg,
+            sfg,
+            sff,
+        };
+        let (a_global, c_global) = m.levels();
         if !(a_global.is_finite() && c_global.is_finite()) {
             return Err(StepFailure::NonFinite);
         }
         var.ssr_global = (sff - a_global * sf - c_global * sfg).max(0.0);
-        let spread = var_f.sqrt();
-        let sign = match polarity {
-            Polarity::Auto => 0.0,
-            Polarity::Positive => 1.0,
-            Polarity::Negative => -1.0,
-        };
+        let sign = polarity_sign(polarity);
         if sign * c_global < 0.0 || (sign != 0.0 && c_global == 0.0) {
             // As with the global pair: the forced polarity disagrees with
             // the band, the curve is still far from the edge.
-            let c = sign * 2.0 * spread;
-            var.set_constant(sf / n - c * sg / n, c);
+            let (a, c) = m.forced(sign);
+            var.set_constant(a, c);
         } else {
-            if c_global.abs() <= 1e-9 || c_global.abs() < 1e-6 * spread {
+            if m.no_contrast(c_global) {
                 return Err(StepFailure::NoContrast);
             }
             // Pulled back, the levels' matrix is that of U = 0, factored
@@ -559,9 +554,9 @@ impl Correlation {
 #[cfg(test)]
 mod tests {
     use crate::band::Band;
+    use crate::correlation::levels::LevelModel;
+    use crate::correlation::Correlation;
     use crate::curve::InitialCurve;
-    use crate::fit::correlation::Correlation;
-    use crate::fit::levels::LevelModel;
     use crate::spline::{Basis, MAX_DEGREE};
     use crate::virtual_image::Kind;
 

@@ -29,7 +29,7 @@
 //! beyond `MAX_TILT`) there is no tilt.
 
 use crate::band::Band;
-use crate::fit::levels::LevelBasis;
+use crate::correlation::levels::LevelBasis;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
 use crate::solver::DenseCholesky;

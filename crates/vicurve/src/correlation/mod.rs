@@ -63,6 +63,8 @@
 //! No allocation happens in `iterate`: the per-thread accumulators are made
 //! once in `new`.
 
+mod global;
+pub mod levels;
 mod tilt;
 mod varying;
 
@@ -70,13 +72,13 @@ pub(crate) use tilt::Measured as MeasuredTilt;
 
 use crate::band::Band;
 use crate::error::{Error, Result};
-use crate::fit::levels::{self, LevelModel};
 use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
 use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Profile;
+use levels::LevelModel;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -104,6 +106,111 @@ struct Accumulator {
     sum_ff: f64,
     outside: Option<[f64; 2]>,
     outside_count: usize,
+}
+
+impl Accumulator {
+    /// Zero the sums for a new pass.
+    fn clear(&mut self) {
+        self.f_proj.iter_mut().for_each(|v| *v = 0.0);
+        self.g_proj.iter_mut().for_each(|v| *v = 0.0);
+        self.d_proj.iter_mut().for_each(|v| *v = 0.0);
+        self.sum_f = 0.0;
+        self.sum_g = 0.0;
+        self.sum_gg = 0.0;
+        self.sum_fg = 0.0;
+        self.sum_ff = 0.0;
+        self.outside = None;
+        self.outside_count = 0;
+    }
+}
+
+/// Weighted moments of a pass: the weight `n` (or pixel count), and the
+/// sums of `f`, `gamma`, `gamma^2`, `f gamma` and `f^2` (`f` the image at
+/// the band pixels, `gamma` the virtual profile).
+#[derive(Clone, Copy, Debug, Default)]
+struct Moments {
+    n: f64,
+    sf: f64,
+    sg: f64,
+    sgg: f64,
+    sfg: f64,
+    sff: f64,
+}
+
+impl Moments {
+    /// The linear least-squares levels `(a, c)` of `f ~ a + c gamma`.
+    fn levels(&self) -> (f64, f64) {
+        let Moments {
+            n,
+            sf,
+            sg,
+            sgg,
+            sfg,
+            ..
+        } = *self;
+        let det = n * sgg - sg * sg;
+        ((sgg * sf - sg * sfg) / det, (n * sfg - sg * sf) / det)
+    }
+
+    /// Standard deviation of `f` over the band.
+    fn spread(&self) -> f64 {
+        (self.sff / self.n - (self.sf / self.n).powi(2))
+            .max(0.0)
+            .sqrt()
+    }
+
+    /// The levels when a forced polarity (`sign`) disagrees with the
+    /// band's content (the curve still far from the edge): the contrast
+    /// from the band's spread, which is that of a step between two levels.
+    fn forced(&self, sign: f64) -> (f64, f64) {
+        let c = sign * 2.0 * self.spread();
+        (self.sf / self.n - c * self.sg / self.n, c)
+    }
+
+    /// Whether contrast `c` is too small for the band to see an edge.
+    fn no_contrast(&self, c: f64) -> bool {
+        c.abs() <= 1e-9 || c.abs() < 1e-6 * self.spread()
+    }
+
+    /// The residual sum of squares of `f - (a + c gamma)`.
+    fn ssr(&self, a: f64, c: f64) -> f64 {
+        let Moments {
+            n,
+            sf,
+            sg,
+            sgg,
+            sfg,
+            sff,
+        } = *self;
+        (n * a * a + c * c * sgg + sff + 2.0 * a * c * sg - 2.0 * a * sf - 2.0 * c * sfg).max(0.0)
+    }
+}
+
+/// The sign a forced polarity gives the contrast (0: estimated).
+fn polarity_sign(polarity: Polarity) -> f64 {
+    match polarity {
+        Polarity::Auto => 0.0,
+        Polarity::Positive => 1.0,
+        Polarity::Negative => -1.0,
+    }
+}
+
+/// A pass whose chunks displaced more than `MAX_OUTSIDE` pixels (or 2 % of
+/// the band's `len`) out of the image has left it, at the first such
+/// point; `chunks` gives each chunk's count and first point.
+fn left_image(
+    chunks: impl Iterator<Item = (usize, Option<[f64; 2]>)> + Clone,
+    len: usize,
+) -> std::result::Result<(), StepFailure> {
+    let outside: usize = chunks.clone().map(|(n, _)| n).sum();
+    if outside > MAX_OUTSIDE.max(len / 50) {
+        let q = chunks
+            .filter_map(|(_, q)| q)
+            .next()
+            .unwrap_or([f64::NAN; 2]);
+        return Err(StepFailure::LeftImage(q));
+    }
+    Ok(())
 }
 
 /// Why an iteration could not produce a step.
@@ -492,185 +599,10 @@ impl Correlation {
             self.pixels = self.band.inside() as f64;
         }
         if self.varying.is_some() {
-            return self.iterate_varying(lambda, sampler, polarity);
+            self.iterate_varying(lambda, sampler, polarity)
+        } else {
+            self.iterate_global(lambda, sampler, polarity)
         }
-        let band = &self.band;
-        let basis = &self.basis;
-        let p = basis.degree();
-        let pushed = self.pushed.as_deref();
-        let levels = self.levels;
-        let displaced_gradient = self.displaced_gradient;
-        self.acc.par_iter_mut().for_each(|acc| {
-            acc.f_proj.iter_mut().for_each(|v| *v = 0.0);
-            acc.g_proj.iter_mut().for_each(|v| *v = 0.0);
-            acc.d_proj.iter_mut().for_each(|v| *v = 0.0);
-            acc.sum_f = 0.0;
-            acc.sum_g = 0.0;
-            acc.sum_gg = 0.0;
-            acc.sum_fg = 0.0;
-            acc.sum_ff = 0.0;
-            acc.outside = None;
-            acc.outside_count = 0;
-            for i in acc.start..acc.end {
-                let w = band.weight[i];
-                if w == 0.0 && pushed.is_some() {
-                    // Out of the window (or rejected): counts for nothing.
-                    continue;
-                }
-                let first = band.first[i] as usize;
-                let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-                let mut u = 0.0;
-                for (k, v) in vals.iter().enumerate() {
-                    u += lambda[basis.index(first, k)] * v;
-                }
-                let mut dg = band.dgamma[i];
-                let (f, gamma) = match pushed {
-                    Some(values) => {
-                        let (gamma, d) = band.profile_at(i, u);
-                        if displaced_gradient {
-                            dg = d;
-                        }
-                        let (wg, wd) = (w * gamma * dg, w * dg);
-                        for (k, v) in vals.iter().enumerate() {
-                            let j = basis.index(first, k);
-                            acc.g_proj[j] += wg * v;
-                            acc.d_proj[j] += wd * v;
-                        }
-                        (values[i], gamma)
-                    }
-                    None => {
-                        let [x, y] = band.pos[i];
-                        let [nx, ny] = band.normal[i];
-                        let (xd, yd) = (x + u * nx, y + u * ny);
-                        let f = match (sampler.value(xd, yd), levels) {
-                            (Some(f), _) => f,
-                            // Displaced out of the image (an open curve's
-                            // end at the border): taken as fitting exactly,
-                            // as long as few pixels are.
-                            (None, Some((a, c))) => {
-                                acc.outside.get_or_insert([xd, yd]);
-                                acc.outside_count += 1;
-                                a + c * band.gamma[i]
-                            }
-                            (None, None) => {
-                                acc.outside = Some([xd, yd]);
-                                acc.outside_count = usize::MAX / 1024;
-                                return;
-                            }
-                        };
-                        (f, band.gamma[i])
-                    }
-                };
-                let wf = w * f;
-                let proj = wf * dg;
-                for (k, v) in vals.iter().enumerate() {
-                    acc.f_proj[basis.index(first, k)] += proj * v;
-                }
-                acc.sum_f += wf;
-                acc.sum_g += w * gamma;
-                acc.sum_gg += w * gamma * gamma;
-                acc.sum_fg += wf * gamma;
-                acc.sum_ff += wf * f;
-            }
-        });
-        let outside: usize = self.acc.iter().map(|a| a.outside_count).sum();
-        if outside > MAX_OUTSIDE.max(band.len() / 50) {
-            let q = self
-                .acc
-                .iter()
-                .find_map(|a| a.outside)
-                .unwrap_or([f64::NAN; 2]);
-            return Err(StepFailure::LeftImage(q));
-        }
-        let (mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0);
-        let (mut sg, mut sgg) = (0.0, 0.0);
-        let rhs = &mut self.delta;
-        rhs.iter_mut().for_each(|v| *v = 0.0);
-        // Pulled back, `sum gamma dg N_i` is the constant G2 and `sum dg
-        // N_i` the constant G1; pushed, both are the current profile's.
-        let h = &mut self.h;
-        let g1_now = &mut self.g1_now;
-        match pushed {
-            Some(_) => {
-                h.iter_mut().for_each(|v| *v = 0.0);
-                g1_now.iter_mut().for_each(|v| *v = 0.0);
-            }
-            None => {
-                h.copy_from_slice(&self.g2);
-                g1_now.copy_from_slice(&self.g1);
-            }
-        }
-        for acc in &self.acc {
-            sf += acc.sum_f;
-            sg += acc.sum_g;
-            sgg += acc.sum_gg;
-            sfg += acc.sum_fg;
-            sff += acc.sum_ff;
-            for (r, v) in rhs.iter_mut().zip(&acc.f_proj) {
-                *r += v;
-            }
-            if pushed.is_some() {
-                for (r, v) in h.iter_mut().zip(&acc.g_proj) {
-                    *r += v;
-                }
-                for (r, v) in g1_now.iter_mut().zip(&acc.d_proj) {
-                    *r += v;
-                }
-            }
-        }
-        let n = self.count;
-        let det = n * sgg - sg * sg;
-        let mut a = (sgg * sf - sg * sfg) / det;
-        let mut c = (n * sfg - sg * sf) / det;
-        let var_f = (sff / n - (sf / n).powi(2)).max(0.0);
-        let sign = match polarity {
-            Polarity::Auto => 0.0,
-            Polarity::Positive => 1.0,
-            Polarity::Negative => -1.0,
-        };
-        if sign * c < 0.0 || (sign != 0.0 && c == 0.0) {
-            // The forced polarity disagrees with the band's content (the
-            // curve is still far from the edge): take the contrast from the
-            // band's spread, which is that of a step between two levels.
-            c = sign * 2.0 * var_f.sqrt();
-            a = sf / n - c * sg / n;
-        }
-        if !(a.is_finite() && c.is_finite()) {
-            return Err(StepFailure::NonFinite);
-        }
-        let spread = var_f.sqrt();
-        if c.abs() <= 1e-9 || c.abs() < 1e-6 * spread {
-            return Err(StepFailure::NoContrast);
-        }
-        // F is in rhs; b_i = c (a G1_i + c H_i - F_i), H_i = sum gamma dg N_i.
-        for ((r, g1), h) in rhs.iter_mut().zip(g1_now.iter()).zip(h.iter()) {
-            *r = c * (a * g1 + c * h - *r);
-        }
-        self.chol.solve_in_place(rhs);
-        // Woodbury: add Y K^-1 B^T z to z = M0^-1 b.
-        let t0: f64 = self.g1.iter().zip(rhs.iter()).map(|(g, z)| g * z).sum();
-        let t1: f64 = self.g2.iter().zip(rhs.iter()).map(|(g, z)| g * z).sum();
-        let w0 = self.k_inv[0] * t0 + self.k_inv[1] * t1;
-        let w1 = self.k_inv[2] * t0 + self.k_inv[3] * t1;
-        let inv_c2 = 1.0 / (c * c);
-        let mut max_step: f64 = 0.0;
-        for ((r, y1), y2) in rhs.iter_mut().zip(&self.y1).zip(&self.y2) {
-            *r = (*r + y1 * w0 + y2 * w1) * inv_c2;
-            max_step = max_step.max(r.abs());
-        }
-        if !max_step.is_finite() {
-            return Err(StepFailure::NonFinite);
-        }
-        let ssr = (n * a * a + c * c * sgg + sff + 2.0 * a * c * sg - 2.0 * a * sf - 2.0 * c * sfg)
-            .max(0.0);
-        self.ssr = ssr;
-        self.levels = Some((a, c));
-        Ok(Step {
-            a,
-            c,
-            residual_rms: (ssr / n).sqrt(),
-            max_step,
-        })
     }
 
     /// Pushed profile only (else `None`): the weighted residual sum of
