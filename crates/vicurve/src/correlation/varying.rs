@@ -274,6 +274,16 @@ impl Varying {
     }
 }
 
+/// What a pass over the band reads besides the levels' state.
+#[derive(Clone, Copy)]
+struct Context<'a> {
+    band: &'a Band,
+    basis: &'a Basis,
+    lambda: &'a [f64],
+    /// The pixel values, when the profile is pushed.
+    pushed: Option<&'a [f64]>,
+}
+
 impl Correlation {
     /// [`Correlation::iterate`] with varying levels.
     pub(super) fn iterate_varying(
@@ -285,23 +295,65 @@ impl Correlation {
         let Some(var) = self.varying.as_deref_mut() else {
             return Err(StepFailure::NonFinite);
         };
-        let band = &self.band;
-        let basis = &self.basis;
+        let ctx = Context {
+            band: &self.band,
+            basis: &self.basis,
+            lambda,
+            pushed: self.pushed.as_deref(),
+        };
+        var.first_pass(ctx, sampler);
+        left_image(
+            var.chunks.iter().map(|a| (a.outside_count, a.outside)),
+            ctx.band.len(),
+        )?;
+        let sums = var.gather_levels(ctx.pushed.is_some());
+        var.solve_levels(&sums, ctx.pushed.is_some(), polarity)?;
+        // The right-hand side takes the profile's derivative where the
+        // profile is (pushed: at `r - U`); the contrast's average `D` stays
+        // that of the reference's (it only scales the step).
+        let displaced = ctx.pushed.is_some() && self.displaced_gradient;
+        var.second_pass(ctx, displaced);
+        let rhs = &mut self.delta;
+        let (ssr, a_mean, c_mean) = var.gather_displacement(rhs, sums[0]);
+        self.chol.solve_in_place(rhs);
+        let max_step = var.woodbury(rhs);
+        if !max_step.is_finite() {
+            return Err(StepFailure::NonFinite);
+        }
+        self.ssr = ssr;
+        self.levels = Some((a_mean, c_mean));
+        Ok(Step {
+            a: a_mean,
+            c: c_mean,
+            residual_rms: (ssr / sums[0]).sqrt(),
+            max_step,
+        })
+    }
+}
+
+impl Varying {
+    /// Pass 1: `f` and `gamma` (and the pushed profile's derivative and
+    /// tilt factor) at the current displacement, kept per pixel; the
+    /// levels' normal equations and the moments, per chunk.
+    fn first_pass(&mut self, ctx: Context<'_>, sampler: &Sampler) {
+        let Context {
+            band,
+            basis,
+            lambda,
+            pushed,
+        } = ctx;
         let p = basis.degree();
-        let pushed = self.pushed.as_deref();
-        let lb = &var.levels;
-        let theta = &var.theta;
-        let have_theta = var.have_theta;
-        let per = var.per;
-        let tilt = var.tilt.as_deref();
-        // Pass 1: f and gamma at the current displacement; the levels'
-        // normal equations.
-        var.chunks
+        let lb = &self.levels;
+        let theta = &self.theta;
+        let have_theta = self.have_theta;
+        let per = self.per;
+        let tilt = self.tilt.as_deref();
+        self.chunks
             .par_iter_mut()
-            .zip(var.fbuf.par_chunks_mut(per))
-            .zip(var.gbuf.par_chunks_mut(per))
-            .zip(var.dbuf.par_chunks_mut(per))
-            .zip(var.sbuf.par_chunks_mut(per))
+            .zip(self.fbuf.par_chunks_mut(per))
+            .zip(self.gbuf.par_chunks_mut(per))
+            .zip(self.dbuf.par_chunks_mut(per))
+            .zip(self.sbuf.par_chunks_mut(per))
             .enumerate()
             .for_each(|(k, ((((acc, fb), gb), db), sb))| {
                 acc.rhs_t.fill(0.0);
@@ -378,28 +430,42 @@ impl Correlation {
                     s[5] += w * f * f;
                 }
             });
-        left_image(
-            var.chunks.iter().map(|a| (a.outside_count, a.outside)),
-            band.len(),
-        )?;
+    }
+
+    /// The first pass's chunks summed: the moments (returned), the levels'
+    /// right-hand side into `t` and, pushed, their matrix into `mat`.
+    fn gather_levels(&mut self, pushed: bool) -> [f64; 9] {
         let mut sums = [0.0; 9];
-        var.t.fill(0.0);
-        if pushed.is_some() {
-            var.mat.fill(0.0);
+        self.t.fill(0.0);
+        if pushed {
+            self.mat.fill(0.0);
         }
-        for acc in &var.chunks {
+        for acc in &self.chunks {
             for (s, v) in sums.iter_mut().zip(acc.sums) {
                 *s += v;
             }
-            for (t, v) in var.t.iter_mut().zip(&acc.rhs_t) {
+            for (t, v) in self.t.iter_mut().zip(&acc.rhs_t) {
                 *t += v;
             }
-            if pushed.is_some() {
-                var.levels.scatter(&acc.mat_t, &mut var.mat);
+            if pushed {
+                self.levels.scatter(&acc.mat_t, &mut self.mat);
             }
         }
+        sums
+    }
+
+    /// The levels' coefficients `theta` of this iteration: solved from the
+    /// normal equations, or constant when a forced polarity disagrees with
+    /// the band (or the levels' matrix is singular); with the global pair's
+    /// polarity and contrast checks.
+    fn solve_levels(
+        &mut self,
+        sums: &[f64; 9],
+        pushed: bool,
+        polarity: Polarity,
+    ) -> std::result::Result<(), StepFailure> {
         // The global pair, for the polarity and contrast checks.
-        let [n, sf, sg, sgg, sfg, sff, ..] = sums;
+        let [n, sf, sg, sgg, sfg, sff, ..] = *sums;
         let m = Moments {
             n,
             sf,
@@ -412,13 +478,13 @@ impl Correlation {
         if !(a_global.is_finite() && c_global.is_finite()) {
             return Err(StepFailure::NonFinite);
         }
-        var.ssr_global = (sff - a_global * sf - c_global * sfg).max(0.0);
+        self.ssr_global = (sff - a_global * sf - c_global * sfg).max(0.0);
         let sign = polarity_sign(polarity);
         if sign * c_global < 0.0 || (sign != 0.0 && c_global == 0.0) {
             // As with the global pair: the forced polarity disagrees with
             // the band, the curve is still far from the edge.
             let (a, c) = m.forced(sign);
-            var.set_constant(a, c);
+            self.set_constant(a, c);
         } else {
             if m.no_contrast(c_global) {
                 return Err(StepFailure::NoContrast);
@@ -426,35 +492,47 @@ impl Correlation {
             // Pulled back, the levels' matrix is that of U = 0, factored
             // once; pushed, it follows U.
             let factor = match pushed {
-                Some(_) => var
+                true => self
                     .mat_factor
-                    .refactor(&var.mat)
+                    .refactor(&self.mat)
                     .ok()
-                    .map(|_| &var.mat_factor),
-                None => Some(&var.s_factor),
+                    .map(|_| &self.mat_factor),
+                false => Some(&self.s_factor),
             };
             match factor {
                 Some(f) => {
-                    f.solve_in_place(&mut var.t);
-                    var.theta.copy_from_slice(&var.t);
+                    f.solve_in_place(&mut self.t);
+                    self.theta.copy_from_slice(&self.t);
                 }
-                None => var.set_constant(a_global, c_global),
+                None => self.set_constant(a_global, c_global),
             }
         }
-        var.have_theta = true;
-        // Pass 2: residuals with the levels; the displacement's right-hand
-        // side and the support-averaged contrast.
-        let lb = &var.levels;
-        let theta = &var.theta;
-        let (fbuf, gbuf, sbuf) = (&var.fbuf, &var.gbuf, &var.sbuf);
-        // The right-hand side takes the profile's derivative where the
-        // profile is (pushed: at `r - U`); the contrast's average `D` stays
-        // that of the reference's (it only scales the step).
-        let dnow = match (pushed, self.displaced_gradient) {
-            (Some(_), true) => &var.dbuf[..],
-            _ => &band.dgamma[..],
+        self.have_theta = true;
+        Ok(())
+    }
+
+    /// Pass 2: residuals with the levels; per chunk, the displacement's
+    /// right-hand side (with the profile's derivative at `r - U` when
+    /// `displaced`, else at `r`), the contrast's sums over each function's
+    /// support, and the sums of `w r^2`, `w a`, `w c`.
+    fn second_pass(&mut self, ctx: Context<'_>, displaced: bool) {
+        let Context {
+            band,
+            basis,
+            pushed,
+            ..
+        } = ctx;
+        let p = basis.degree();
+        let per = self.per;
+        let lb = &self.levels;
+        let theta = &self.theta;
+        let (fbuf, gbuf, sbuf) = (&self.fbuf, &self.gbuf, &self.sbuf);
+        let dnow = if displaced {
+            &self.dbuf[..]
+        } else {
+            &band.dgamma[..]
         };
-        var.chunks.par_iter_mut().enumerate().for_each(|(k, acc)| {
+        self.chunks.par_iter_mut().enumerate().for_each(|(k, acc)| {
             acc.rhs_l.fill(0.0);
             acc.dnum.fill(0.0);
             let mut s = [0.0; 3];
@@ -485,15 +563,22 @@ impl Correlation {
             acc.sums[7] = s[1];
             acc.sums[8] = s[2];
         });
-        let rhs = &mut self.delta;
+    }
+
+    /// The second pass's chunks summed: the displacement's right-hand side
+    /// into `rhs`, divided by `D_i`, the contrast averaged over the
+    /// support of `N_i` (kept away from zero, and on the mean's side,
+    /// where the band sees little); `n` the pass's weight. Returns the
+    /// residual sum of squares and the mean levels.
+    fn gather_displacement(&mut self, rhs: &mut [f64], n: f64) -> (f64, f64, f64) {
         rhs.fill(0.0);
-        var.d.fill(0.0);
+        self.d.fill(0.0);
         let (mut ssr, mut sa, mut sc) = (0.0, 0.0, 0.0);
-        for acc in &var.chunks {
+        for acc in &self.chunks {
             for (r, v) in rhs.iter_mut().zip(&acc.rhs_l) {
                 *r += v;
             }
-            for (d, v) in var.d.iter_mut().zip(&acc.dnum) {
+            for (d, v) in self.d.iter_mut().zip(&acc.dnum) {
                 *d += v;
             }
             ssr += acc.sums[6];
@@ -501,10 +586,8 @@ impl Correlation {
             sc += acc.sums[8];
         }
         let (a_mean, c_mean) = (sa / n, sc / n);
-        // D_i: the contrast averaged over the support of N_i, kept away
-        // from zero (and on the mean's side) where the band sees little.
         let floor = 0.25 * c_mean.abs();
-        for (d, den) in var.d.iter_mut().zip(&var.dden) {
+        for (d, den) in self.d.iter_mut().zip(&self.dden) {
             let v = if *den > 0.0 { *d / den } else { c_mean };
             *d = if v * c_mean.signum() < floor {
                 floor * c_mean.signum()
@@ -512,42 +595,36 @@ impl Correlation {
                 v
             };
         }
-        for (r, d) in rhs.iter_mut().zip(&var.d) {
+        for (r, d) in rhs.iter_mut().zip(&self.d) {
             *r /= d;
         }
-        self.chol.solve_in_place(rhs);
-        // Woodbury: z += Y K^-1 B^T z.
+        (ssr, a_mean, c_mean)
+    }
+
+    /// The step from `z = M0^-1 b` in `rhs`: the Woodbury term
+    /// `Y K^-1 B^T z` added, over `D_i`. Returns `max |dLambda|`.
+    fn woodbury(&mut self, rhs: &mut [f64]) -> f64 {
         let nn = rhs.len();
-        for (col, t) in var.t.iter_mut().enumerate() {
-            *t = var.b[col * nn..(col + 1) * nn]
+        for (col, t) in self.t.iter_mut().enumerate() {
+            *t = self.b[col * nn..(col + 1) * nn]
                 .iter()
                 .zip(rhs.iter())
                 .map(|(b, z)| b * z)
                 .sum();
         }
-        var.k_factor.solve_in_place(&mut var.t);
+        self.k_factor.solve_in_place(&mut self.t);
         let mut max_step: f64 = 0.0;
-        for (i, (r, d)) in rhs.iter_mut().zip(&var.d).enumerate() {
-            let corr: f64 = var
+        for (i, (r, d)) in rhs.iter_mut().zip(&self.d).enumerate() {
+            let corr: f64 = self
                 .t
                 .iter()
                 .enumerate()
-                .map(|(col, t)| var.y[col * nn + i] * t)
+                .map(|(col, t)| self.y[col * nn + i] * t)
                 .sum();
             *r = (*r + corr) / d;
             max_step = max_step.max(r.abs());
         }
-        if !max_step.is_finite() {
-            return Err(StepFailure::NonFinite);
-        }
-        self.ssr = ssr;
-        self.levels = Some((a_mean, c_mean));
-        Ok(Step {
-            a: a_mean,
-            c: c_mean,
-            residual_rms: (ssr / n).sqrt(),
-            max_step,
-        })
+        max_step
     }
 }
 
