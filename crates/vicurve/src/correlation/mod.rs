@@ -239,8 +239,8 @@ pub(crate) struct Step {
 
 /// The prepared system of one reference; see the [module docs](self).
 pub(crate) struct Correlation {
-    pub band: Band,
-    pub basis: Basis,
+    band: Band,
+    basis: Basis,
     chol: BandCholesky,
     g1: Vec<f64>,
     g2: Vec<f64>,
@@ -261,17 +261,17 @@ pub(crate) struct Correlation {
     levels: Option<(f64, f64)>,
     /// Robust weight of each band pixel (1: kept whole, 0: rejected), already
     /// folded into the band's weights; see `robust_refit` in the fit.
-    pub robust: Vec<f64>,
+    robust: Vec<f64>,
     /// The pixel values at the band pixels when the profile is pushed (see
     /// the [module docs](self)); `None` when the image is pulled back.
     pushed: Option<Vec<f64>>,
     /// The last step, `dLambda`.
-    pub delta: Vec<f64>,
+    delta: Vec<f64>,
     /// The last residual sum of squares.
-    pub ssr: f64,
+    ssr: f64,
     /// Pure-noise variance of the gray levels, once estimated
     /// ([`Correlation::estimate_noise`]).
-    pub noise_var: Option<f64>,
+    noise_var: Option<f64>,
     /// Gray levels that vary along the curve ([`LevelModel::Varying`]);
     /// `None`: the global pair.
     varying: Option<Box<varying::Varying>>,
@@ -578,6 +578,47 @@ impl Correlation {
     /// Whether the gradient takes the profile's derivative at `r - U`.
     pub fn displaced_gradient(&self) -> bool {
         self.pushed.is_some() && self.displaced_gradient
+    }
+
+    /// The band the system is built on.
+    pub fn band(&self) -> &Band {
+        &self.band
+    }
+
+    /// Bend the band's profile to the curvature of the curve at `lambda`
+    /// ([`Band::bend_to`]): a kept band's next frame.
+    pub fn bend_to(&mut self, lambda: &[f64]) {
+        self.band.bend_to(&self.basis, lambda);
+    }
+
+    /// The displacement's basis.
+    pub fn basis(&self) -> &Basis {
+        &self.basis
+    }
+
+    /// The robust weight of each band pixel (see `robust_refit` in the fit).
+    pub fn robust(&self) -> &[f64] {
+        &self.robust
+    }
+
+    /// Set the robust weights the band's weights were multiplied by.
+    pub fn set_robust(&mut self, robust: Vec<f64>) {
+        self.robust = robust;
+    }
+
+    /// The last step, `dLambda`, pixels.
+    pub fn delta(&self) -> &[f64] {
+        &self.delta
+    }
+
+    /// Pure-noise variance of the gray levels, once estimated.
+    pub fn noise_var(&self) -> Option<f64> {
+        self.noise_var
+    }
+
+    /// Take the noise variance estimated on another run of the stage.
+    pub fn set_noise_var(&mut self, noise_var: Option<f64>) {
+        self.noise_var = noise_var;
     }
 
     /// Number of unknowns of the displacement.

@@ -75,7 +75,7 @@ pub(super) fn matched_band(e: &psf::EdgeSpread) -> f64 {
 /// along a straight edge (the profile is symmetric), but a mismatched width
 /// makes the fit depend on the edge's sub-pixel phase.
 pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
-    let stride = corr.band.len().div_ceil(BLUR_FIT_PIXELS);
+    let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
     let ssr = |blur: f64| {
         corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
             .unwrap_or(f64::INFINITY)

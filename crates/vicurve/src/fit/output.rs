@@ -65,7 +65,7 @@ impl Final {
         let fine_step = spacing / per / (1.0 + STRETCH_ALLOWANCE);
         let closed = self.reference.is_closed();
         let (params, mut pts, corners) =
-            breaks::displaced_samples(&self.reference, &self.corr.basis, &self.lambda, fine_step);
+            breaks::displaced_samples(&self.reference, self.corr.basis(), &self.lambda, fine_step);
         let mut curve =
             SplineCurve::fit_with_corners(&pts, closed, degree, CURVE_SPACING, &corners)?;
         let mut s = chord_lengths(&pts);
@@ -154,9 +154,9 @@ impl WeightBins {
         }
         let nbins = l.ceil() as usize + 1;
         let mut bins = vec![(0.0, 0.0); nbins];
-        for (i, &u) in corr.band.s.iter().enumerate() {
+        for (i, &u) in corr.band().s.iter().enumerate() {
             let b = &mut bins[(u.max(0.0) as usize).min(nbins - 1)];
-            b.0 += corr.robust[i];
+            b.0 += corr.robust()[i];
             b.1 += 1.0;
         }
         WeightBins { bins }

@@ -69,7 +69,7 @@ pub(super) fn refine(
     let mut previous_diff2 = f64::INFINITY;
     corr.estimate_noise(&lambda, sampler);
     loop {
-        let h = corr.basis.element_length() / 2.0;
+        let h = corr.basis().element_length() / 2.0;
         if h < shortest {
             break;
         }
@@ -111,8 +111,8 @@ pub(super) fn refine(
         fine.estimate_noise(&fine_lambda, sampler);
         let (mut diff2, mut noise2) = (0.0, 0.0);
         for &u in &params {
-            let d =
-                displacement(&fine.basis, &fine_lambda, u) - displacement(&corr.basis, &lambda, u);
+            let d = displacement(fine.basis(), &fine_lambda, u)
+                - displacement(corr.basis(), &lambda, u);
             diff2 += d * d;
             let sf = fine.position_sigma(u);
             let sc = corr.position_sigma(u);

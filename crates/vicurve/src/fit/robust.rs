@@ -82,10 +82,10 @@ pub(super) fn robust_refit(
 ) -> (usize, bool) {
     let RobustFit { corr, lambda, step } = fit;
     let base: Vec<f64> = corr
-        .band
+        .band()
         .full_weights()
         .iter()
-        .zip(&corr.robust)
+        .zip(corr.robust())
         .map(|(w, k)| if *k > 0.0 { w / k } else { *w })
         .collect();
     let mut used = 0;
@@ -96,8 +96,8 @@ pub(super) fn robust_refit(
         let residual = |i: usize| corr.residual(i, lambda, sampler).unwrap_or(0.0);
         // Detection on a regular subsample (a crossing wire still leaves
         // several of its pixels in it); all residuals only when needed.
-        let stride = corr.band.len().div_ceil(ROBUST_PROBE_PIXELS).max(1);
-        let probe: Vec<f64> = (0..corr.band.len().div_ceil(stride))
+        let stride = corr.band().len().div_ceil(ROBUST_PROBE_PIXELS).max(1);
+        let probe: Vec<f64> = (0..corr.band().len().div_ceil(stride))
             .into_par_iter()
             .map(|k| residual(k * stride))
             .collect();
@@ -105,17 +105,20 @@ pub(super) fn robust_refit(
             break;
         };
         found = true;
-        let res: Vec<f64> = (0..corr.band.len()).into_par_iter().map(residual).collect();
+        let res: Vec<f64> = (0..corr.band().len())
+            .into_par_iter()
+            .map(residual)
+            .collect();
         let robust: Vec<f64> = res.iter().map(|v| tukey_weight(*v, scale)).collect();
-        let mut band = corr.band.clone();
+        let mut band = corr.band().clone();
         let weights = base.iter().zip(&robust).map(|(b, k)| b * k).collect();
-        band.set_full_weights(weights, &corr.basis, lambda);
+        band.set_full_weights(weights, corr.basis(), lambda);
         let Ok(mut next) =
-            Correlation::prepare(band, corr.basis.clone(), sampler, config.levels, None)
+            Correlation::prepare(band, corr.basis().clone(), sampler, config.levels, None)
         else {
             break;
         };
-        next.robust = robust;
+        next.set_robust(robust);
         // As the stage's later runs (see `StageState::cluttered`).
         next.use_reference_gradient();
         let mut next_lambda = lambda.clone();

@@ -110,7 +110,7 @@ pub(super) fn iterate_to_end(
         });
         used += 1;
         *step = Some(s);
-        let omega = relax.factor(&corr.delta);
+        let omega = relax.factor(corr.delta());
         let scale = omega
             * if omega * s.max_step > cap {
                 cap / (omega * s.max_step)
@@ -118,7 +118,7 @@ pub(super) fn iterate_to_end(
                 1.0
             };
         relax.applied(scale);
-        for (l, d) in lambda.iter_mut().zip(&corr.delta) {
+        for (l, d) in lambda.iter_mut().zip(corr.delta()) {
             *l += scale * d;
         }
         if previous_steps[1].is_finite() {

@@ -231,7 +231,7 @@ impl<'s> Schedule<'s> {
         }
         let r = stage.half_width;
         self.edge_spread = estimate_spread(self.sampler, &self.current, self.config.kind);
-        let chosen = self.last.as_ref().map(|f| f.corr.basis.element_length());
+        let chosen = self.last.as_ref().map(|f| f.corr.basis().element_length());
         if let (Some(e), Some(chosen), true, false) =
             (self.edge_spread, chosen, self.auto, self.matched_added)
         {
@@ -347,7 +347,7 @@ impl<'s> Schedule<'s> {
         };
         let keep = self.outcome == Outcome::Converged
             && motion.is_some()
-            && fin.corr.band.margin() > 0.0
+            && fin.corr.band().margin() > 0.0
             && !fin.corr.reweighted();
         let kept = keep.then(|| {
             Box::new(track::Kept {

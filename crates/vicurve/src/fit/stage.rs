@@ -219,9 +219,9 @@ impl Schedule<'_> {
                     velocity,
                     ..
                 } = *kept;
-                let basis = corr.basis.clone();
+                let basis = corr.basis().clone();
                 corr.reload(self.sampler)?;
-                let pixels = corr.band.len();
+                let pixels = corr.band().len();
                 (corr, basis, pixels, Some((lambda, velocity)))
             }
             None => {
@@ -239,7 +239,7 @@ impl Schedule<'_> {
         };
         let mut lambda = self.start_run(st, &mut corr, kept);
         // A band with a margin needs no settle (see `track::TRACK_MARGIN`).
-        let windowed = corr.band.margin() > 0.0;
+        let windowed = corr.band().margin() > 0.0;
         // A run that a settle is sure to follow only places its reference.
         let pre_settle = self.auto && st.is_last && !st.followed && st.settles == 0 && !windowed;
         let tolerance = if pre_settle {
@@ -251,7 +251,7 @@ impl Schedule<'_> {
         let rereference = if st.rereferences >= MAX_REREFERENCES {
             f64::INFINITY
         } else if windowed {
-            corr.band.margin()
+            corr.band().margin()
         } else {
             self.config.rereference_fraction * r
         };
@@ -297,8 +297,8 @@ impl Schedule<'_> {
         };
         match end {
             Run::Rereference => {
-                let spacing = reference_spacing(&system.corr.basis);
-                self.move_reference(st, &system.corr.basis, &lambda, spacing)?;
+                let spacing = reference_spacing(system.corr.basis());
+                self.move_reference(st, system.corr.basis(), &lambda, spacing)?;
                 Ok(Next::Again)
             }
             Run::Failed(divergence) if st.appended => {
@@ -313,7 +313,7 @@ impl Schedule<'_> {
                     band_pixels,
                     ..
                 } = system;
-                self.fail(st, divergence, (profile, &corr.basis, band_pixels));
+                self.fail(st, divergence, (profile, corr.basis(), band_pixels));
                 Ok(Next::Exit(Flow::Stop))
             }
             Run::Converged => self.end_run(st, Outcome::Converged, system, lambda),
@@ -449,8 +449,8 @@ impl Schedule<'_> {
         corr: &mut Correlation,
         kept: Option<(Vec<f64>, Option<Vec<f64>>)>,
     ) -> Vec<f64> {
-        if corr.noise_var.is_none() {
-            corr.noise_var = st.stage_noise;
+        if corr.noise_var().is_none() {
+            corr.set_noise_var(st.stage_noise);
         }
         // A cluttered band's fits (its reweighted ones, and the stage's
         // later runs) keep the reference's profile derivative in their
@@ -474,7 +474,7 @@ impl Schedule<'_> {
             }
             // The profile on the curvature of that curve, as a band built
             // on it would have (see `band`).
-            corr.band.bend_to(&corr.basis, &lambda);
+            corr.bend_to(&lambda);
             self.run_start = Some(kept);
         } else if self.tracked.is_some() {
             self.run_start = Some(lambda.clone());
@@ -548,7 +548,7 @@ impl Schedule<'_> {
             st.iterations += used;
         }
         if auto_elements {
-            st.fixed_elements = Some(corr.basis.n_elements());
+            st.fixed_elements = Some(corr.basis().n_elements());
         }
         if o == Outcome::Converged && st.cluttered != Some(false) {
             let fit = RobustFit {
@@ -564,17 +564,17 @@ impl Schedule<'_> {
         // cluttered one's estimate is made without the rejected pixels, on
         // each run's own weights).
         if st.cluttered == Some(false) && st.stage_noise.is_none() {
-            st.stage_noise = corr.noise_var;
+            st.stage_noise = corr.noise_var();
         }
         let again = self.refit_blur(st, &corr, &lambda, (pushed, o));
         let settle = self.settles(st, &lambda, o, windowed, again);
         if again || settle {
-            let spacing = corr.basis.element_length().max(CURVE_SPACING);
-            self.move_reference(st, &corr.basis, &lambda, spacing)?;
+            let spacing = corr.basis().element_length().max(CURVE_SPACING);
+            self.move_reference(st, corr.basis(), &lambda, spacing)?;
             st.settles += 1;
             return Ok(Next::Again);
         }
-        if let (None, Some(_)) = (corr.noise_var, st.step) {
+        if let (None, Some(_)) = (corr.noise_var(), st.step) {
             corr.estimate_noise(&lambda, self.sampler);
         }
         // The next stage's reference, or the curve the edge's spread is
@@ -583,16 +583,16 @@ impl Schedule<'_> {
         let next = if self.tracked.is_some() && st.is_last {
             None
         } else {
-            let spacing = reference_spacing(&corr.basis);
+            let spacing = reference_spacing(corr.basis());
             Some(next_reference(
                 &self.current,
-                &corr.basis,
+                corr.basis(),
                 &lambda,
                 spacing,
                 st.clip,
             )?)
         };
-        let report = st.report(profile, &corr.basis, band_pixels, o);
+        let report = st.report(profile, corr.basis(), band_pixels, o);
         self.reports.push(report);
         self.last = Some(Final {
             half_width: r,
@@ -616,7 +616,7 @@ impl Schedule<'_> {
         basis: &Basis,
         tolerance: f64,
     ) {
-        let band = corr.band.clone();
+        let band = corr.band().clone();
         let Ok(mut global) =
             Correlation::prepare(band, basis.clone(), self.sampler, self.config.levels, None)
         else {

@@ -297,7 +297,7 @@ pub(super) fn refit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f6
 /// The band's residual as a function of the pixel edge's blur (pixels),
 /// on at most `BLUR_FIT_PIXELS` of its pixels.
 fn blur_residual<'a>(corr: &'a Correlation, lambda: &'a [f64]) -> impl Fn(f64) -> f64 + 'a {
-    let stride = corr.band.len().div_ceil(BLUR_FIT_PIXELS);
+    let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
     move |blur: f64| {
         corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
             .unwrap_or(f64::INFINITY)

@@ -148,10 +148,10 @@ struct BandRecord {
 impl BandRecord {
     fn of(kept: &Kept) -> Option<BandRecord> {
         let basis = kept.reference.basis();
-        let Profile::PixelEdge { blur } = kept.corr.band.profile() else {
+        let Profile::PixelEdge { blur } = kept.corr.band().profile() else {
             return None;
         };
-        if !(basis.breaks().is_empty() && kept.corr.basis.breaks().is_empty()) {
+        if !(basis.breaks().is_empty() && kept.corr.basis().breaks().is_empty()) {
             return None;
         }
         Some(BandRecord {
@@ -160,12 +160,12 @@ impl BandRecord {
             length: basis.length(),
             elements: basis.n_elements(),
             control_points: kept.reference.control_points().to_vec(),
-            displacement_degree: kept.corr.basis.degree(),
-            displacement_elements: kept.corr.basis.n_elements(),
+            displacement_degree: kept.corr.basis().degree(),
+            displacement_elements: kept.corr.basis().n_elements(),
             lambda: kept.lambda.clone(),
             velocity: kept.velocity.clone(),
-            half_width: kept.corr.band.half_width(),
-            margin: kept.corr.band.margin(),
+            half_width: kept.corr.band().half_width(),
+            margin: kept.corr.band().margin(),
             blur,
             levels: kept.levels,
             width: kept.size.0,
@@ -289,7 +289,7 @@ impl TrackCache {
         };
         match self.held.take()? {
             Held::Built(kept) => {
-                let band = &kept.corr.band;
+                let band = &kept.corr.band();
                 let serves = kept.levels == levels
                     && kept.size == size
                     && fits(
