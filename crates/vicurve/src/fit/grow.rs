@@ -220,6 +220,41 @@ pub fn grow(
     config: &FitConfig,
     grow: &GrowConfig,
 ) -> Result<Grown> {
+    check_start(&start, config, grow)?;
+    let first = measure_from(sampler, start, config)?;
+    let mut report = GrowReport {
+        config: grow.clone(),
+        ends: [EndReason::StartFailed; 2],
+        steps: Vec::new(),
+    };
+    if !first.outcome.is_converged() {
+        return Ok(Grown {
+            measurement: first,
+            report,
+        });
+    }
+    let mut growth = Growth::new(sampler, config, grow, &first);
+    growth.run(&mut report);
+    let reference = match growth.closed {
+        Some(m) => {
+            report.ends = [EndReason::Closed; 2];
+            m.curve
+        }
+        None => {
+            report.ends = growth.ends.map(|e| e.unwrap_or(EndReason::StepLimit));
+            SplineCurve::fit(&growth.chain.points(), false, 3, REBUILD_SPACING)?
+        }
+    };
+    let measurement = measure_from(sampler, reference, config)?;
+    Ok(Grown {
+        measurement,
+        report,
+    })
+}
+
+/// The errors of [`grow`]'s inputs: the configurations, a closed start,
+/// breaks.
+fn check_start(start: &SplineCurve, config: &FitConfig, grow: &GrowConfig) -> Result<()> {
     grow.validate()?;
     config.validate()?;
     if start.is_closed() {
@@ -236,158 +271,191 @@ pub fn grow(
             "breaks (corners) cannot be combined with growing: their positions are along the initial curve; measure the grown curve again with the breaks",
         ));
     }
-    let first = measure_from(sampler, start, config)?;
-    let mut report = GrowReport {
-        config: grow.clone(),
-        ends: [EndReason::StartFailed; 2],
-        steps: Vec::new(),
-    };
-    if !first.outcome.is_converged() {
-        return Ok(Grown {
-            measurement: first,
-            report,
-        });
-    }
-    let probe_width = probe_half_width(&first);
-    let step_config = step_config(config, probe_width);
-    let reach = (2.0 * probe_width).max(6.0);
-    let margin = reach + grow.border_gap;
-    let (w, h) = (sampler.width() as f64, sampler.height() as f64);
-    let inside = |p: [f64; 2]| {
-        p[0] >= margin && p[1] >= margin && p[0] <= w - 1.0 - margin && p[1] <= h - 1.0 - margin
-    };
-    let probe = Probe {
-        sampler,
-        kind: config.kind,
-        half_width: probe_width,
-    };
+    Ok(())
+}
 
-    let mut chain = Chain::of(&first);
-    let mut steps = [grow.first_step; 2];
-    let mut ends: [Option<EndReason>; 2] = [None, None];
-    let mut closed: Option<Measurement> = None;
-    let mut budget = grow.max_steps;
-    'growing: while budget > 0 && ends.iter().any(Option::is_none) {
-        // The ends meet: close the loop. Only over a gap the band bridges:
-        // the steps shrink towards each other (below) until then, and an
-        // edge that stops short of closing (a C) ends its growth first.
-        let meeting = chain.meeting();
-        if let Some(gap) = meeting {
-            if gap <= reach && ends.iter().all(Option::is_none) {
-                let loop_fit = SplineCurve::fit(&chain.points(), true, 3, REBUILD_SPACING)
-                    .and_then(|c| measure_from(sampler, c, &step_config));
-                match loop_fit {
-                    Ok(m) if m.outcome.is_converged() => closed = Some(m),
-                    _ => ends = [Some(EndReason::MetUnclosed); 2],
-                }
-                break;
-            }
+/// The state of the growth (steps 2 to 4 of the module docs).
+struct Growth<'a> {
+    sampler: &'a Sampler,
+    grow: &'a GrowConfig,
+    /// The short schedule of the steps.
+    step_config: FitConfig,
+    /// The growing band's half-width, pixels: ends closer than this close
+    /// the loop.
+    reach: f64,
+    /// Extensions stay this far from the image border, pixels.
+    margin: f64,
+    probe: Probe<'a>,
+    chain: Chain,
+    /// Each end's next step, pixels.
+    steps: [f64; 2],
+    /// Why each end stopped, once it has.
+    ends: [Option<EndReason>; 2],
+    /// The closed curve, when the ends met.
+    closed: Option<Measurement>,
+    /// Steps left.
+    budget: usize,
+}
+
+impl<'a> Growth<'a> {
+    fn new(
+        sampler: &'a Sampler,
+        config: &FitConfig,
+        grow: &'a GrowConfig,
+        first: &Measurement,
+    ) -> Self {
+        let probe_width = probe_half_width(first);
+        let reach = (2.0 * probe_width).max(6.0);
+        Growth {
+            sampler,
+            grow,
+            step_config: step_config(config, probe_width),
+            reach,
+            margin: reach + grow.border_gap,
+            probe: Probe {
+                sampler,
+                kind: config.kind,
+                half_width: probe_width,
+            },
+            chain: Chain::of(first),
+            steps: [grow.first_step; 2],
+            ends: [None, None],
+            closed: None,
+            budget: grow.max_steps,
         }
-        for e in 0..2 {
-            if ends[e].is_some() {
-                continue;
-            }
-            if budget == 0 {
-                break 'growing;
-            }
-            budget -= 1;
-            let length = chain.length();
-            let remaining = grow.max_length.map_or(f64::INFINITY, |l| l - length);
-            if remaining < 1.0 {
-                ends.iter_mut().for_each(|e| {
-                    e.get_or_insert(EndReason::Length);
-                });
-                break 'growing;
-            }
-            let active = ends.iter().filter(|e| e.is_none()).count() as f64;
-            let mut len = steps[e].min(remaining / active);
+    }
+
+    /// The ends take turns until both have stopped, they meet or the
+    /// steps run out.
+    fn run(&mut self, report: &mut GrowReport) {
+        while self.budget > 0 && self.ends.iter().any(Option::is_none) {
+            // The ends meet: close the loop. Only over a gap the band
+            // bridges: the steps shrink towards each other (below) until
+            // then, and an edge that stops short of closing (a C) ends its
+            // growth first.
+            let meeting = self.chain.meeting();
             if let Some(gap) = meeting {
-                // Heading towards each other: stop short of crossing.
-                len = len.min(0.45 * gap);
-            }
-            let ext = chain.extension(e, len, inside);
-            if ext.is_empty() {
-                ends[e] = Some(EndReason::Border);
-                continue;
-            }
-            let extended = ext.len() as f64 * len / len.ceil().max(1.0);
-            // The end's last FIT_WINDOW px and the extension, in the
-            // curve's direction.
-            let old = chain.end_part(e, FIT_WINDOW);
-            let mut points: Vec<[f64; 2]> = Vec::with_capacity(old.len() + ext.len());
-            if e == 0 {
-                points.extend(ext.iter().rev());
-                points.extend(old.iter().map(|q| q.p));
-            } else {
-                points.extend(old.iter().rev().map(|q| q.p));
-                points.extend(ext.iter());
-            }
-            let trial = SplineCurve::fit(&points, false, 3, REBUILD_SPACING)
-                .and_then(|c| measure_from(sampler, c, &step_config));
-            let kept = match &trial {
-                Ok(m) if m.outcome.is_converged() => {
-                    let new = Chain::of(m);
-                    let before = probe.median(&chain.end_part(e, CONTRAST_WINDOW));
-                    // The measured end sits where the extension ended, give
-                    // or take a pixel: judge the extension at least 1 px in.
-                    let after = probe.median(&new.end_part(e, (extended - 1.0).max(1.0)));
-                    let ok = match (before, after) {
-                        (Some(b), Some(a)) => {
-                            b != 0.0 && a * b.signum() >= grow.min_contrast * b.abs()
-                        }
-                        _ => false,
-                    };
-                    if ok {
-                        chain.splice(e, &new, extended + 0.5 * FIT_WINDOW);
-                    }
-                    ok
+                if gap <= self.reach && self.ends.iter().all(Option::is_none) {
+                    self.close(&self.chain.points());
+                    return;
                 }
-                _ => false,
-            };
-            report.steps.push(GrowStep {
-                end: e,
-                length,
-                extended,
-                kept,
-            });
-            if kept {
-                steps[e] = (steps[e] * STEP_GROWTH).min(grow.max_step);
-                // The new end runs onto the other end: a loop.
-                if let Some(ring) = chain.overlap(e, extended + FIT_WINDOW) {
-                    let loop_fit = SplineCurve::fit(&ring, true, 3, REBUILD_SPACING)
-                        .and_then(|c| measure_from(sampler, c, &step_config));
-                    match loop_fit {
-                        Ok(m) if m.outcome.is_converged() => closed = Some(m),
-                        _ => ends = [Some(EndReason::MetUnclosed); 2],
-                    }
-                    break 'growing;
+            }
+            for e in 0..2 {
+                if self.ends[e].is_some() {
+                    continue;
                 }
-            } else {
-                steps[e] = 0.5 * steps[e].min(extended);
-                if steps[e] < grow.min_step {
-                    ends[e] = Some(EndReason::EdgeEnds);
+                if self.budget == 0 {
+                    return;
+                }
+                self.budget -= 1;
+                if !self.step(e, meeting, report) {
+                    return;
                 }
             }
         }
     }
-    let reference = match closed {
-        Some(m) => {
-            report.ends = [EndReason::Closed; 2];
-            m.curve
+
+    /// Measure `ring` as a closed curve: the grown loop, or both ends met
+    /// unclosed when it does not converge.
+    fn close(&mut self, ring: &[[f64; 2]]) {
+        let loop_fit = SplineCurve::fit(ring, true, 3, REBUILD_SPACING)
+            .and_then(|c| measure_from(self.sampler, c, &self.step_config));
+        match loop_fit {
+            Ok(m) if m.outcome.is_converged() => self.closed = Some(m),
+            _ => self.ends = [Some(EndReason::MetUnclosed); 2],
         }
-        None => {
-            report.ends = [
-                ends[0].unwrap_or(EndReason::StepLimit),
-                ends[1].unwrap_or(EndReason::StepLimit),
-            ];
-            SplineCurve::fit(&chain.points(), false, 3, REBUILD_SPACING)?
+    }
+
+    /// One step of end `e` (`meeting`: the gap when the ends head towards
+    /// each other). Returns whether the growth goes on.
+    fn step(&mut self, e: usize, meeting: Option<f64>, report: &mut GrowReport) -> bool {
+        let length = self.chain.length();
+        let remaining = self.grow.max_length.map_or(f64::INFINITY, |l| l - length);
+        if remaining < 1.0 {
+            self.ends.iter_mut().for_each(|e| {
+                e.get_or_insert(EndReason::Length);
+            });
+            return false;
         }
-    };
-    let measurement = measure_from(sampler, reference, config)?;
-    Ok(Grown {
-        measurement,
-        report,
-    })
+        let active = self.ends.iter().filter(|e| e.is_none()).count() as f64;
+        let mut len = self.steps[e].min(remaining / active);
+        if let Some(gap) = meeting {
+            // Heading towards each other: stop short of crossing.
+            len = len.min(0.45 * gap);
+        }
+        let (margin, w, h) = (
+            self.margin,
+            self.sampler.width() as f64,
+            self.sampler.height() as f64,
+        );
+        let inside = |p: [f64; 2]| {
+            p[0] >= margin && p[1] >= margin && p[0] <= w - 1.0 - margin && p[1] <= h - 1.0 - margin
+        };
+        let ext = self.chain.extension(e, len, inside);
+        if ext.is_empty() {
+            self.ends[e] = Some(EndReason::Border);
+            return true;
+        }
+        let extended = ext.len() as f64 * len / len.ceil().max(1.0);
+        let kept = self.try_extension(e, &ext, extended);
+        report.steps.push(GrowStep {
+            end: e,
+            length,
+            extended,
+            kept,
+        });
+        if kept {
+            self.steps[e] = (self.steps[e] * STEP_GROWTH).min(self.grow.max_step);
+            // The new end runs onto the other end: a loop.
+            if let Some(ring) = self.chain.overlap(e, extended + FIT_WINDOW) {
+                self.close(&ring);
+                return false;
+            }
+        } else {
+            self.steps[e] = 0.5 * self.steps[e].min(extended);
+            if self.steps[e] < self.grow.min_step {
+                self.ends[e] = Some(EndReason::EdgeEnds);
+            }
+        }
+        true
+    }
+
+    /// Measure end `e`'s last `FIT_WINDOW` px with the extension `ext`
+    /// (`extended` px long), in the curve's direction, and splice it in
+    /// when it converges and still sees the edge (step 4). Returns whether
+    /// it was kept.
+    fn try_extension(&mut self, e: usize, ext: &[[f64; 2]], extended: f64) -> bool {
+        let old = self.chain.end_part(e, FIT_WINDOW);
+        let mut points: Vec<[f64; 2]> = Vec::with_capacity(old.len() + ext.len());
+        if e == 0 {
+            points.extend(ext.iter().rev());
+            points.extend(old.iter().map(|q| q.p));
+        } else {
+            points.extend(old.iter().rev().map(|q| q.p));
+            points.extend(ext.iter());
+        }
+        let trial = SplineCurve::fit(&points, false, 3, REBUILD_SPACING)
+            .and_then(|c| measure_from(self.sampler, c, &self.step_config));
+        let Ok(m) = &trial else { return false };
+        if !m.outcome.is_converged() {
+            return false;
+        }
+        let new = Chain::of(m);
+        let before = self.probe.median(&self.chain.end_part(e, CONTRAST_WINDOW));
+        // The measured end sits where the extension ended, give or take a
+        // pixel: judge the extension at least 1 px in.
+        let after = self
+            .probe
+            .median(&new.end_part(e, (extended - 1.0).max(1.0)));
+        let ok = match (before, after) {
+            (Some(b), Some(a)) => b != 0.0 && a * b.signum() >= self.grow.min_contrast * b.abs(),
+            _ => false,
+        };
+        if ok {
+            self.chain.splice(e, &new, extended + 0.5 * FIT_WINDOW);
+        }
+        ok
+    }
 }
 
 /// The last band of the first measurement with the kind's own profile (the
