@@ -8,6 +8,24 @@
 //! `max |U|` exceeds a fraction of `R` within a stage, so that a start far
 //! from the edge (a circle crossing a star) converges.
 //!
+//! # The files, in the order a fit runs them
+//! - [`config`](FitConfig): the configuration, the stages and their
+//!   elements.
+//! - `schedule.rs`: the stages in turn; after the last, the edge's blur
+//!   chooses a stage to append; the result and, for a tracked frame, the
+//!   band kept for the next one.
+//! - `stage.rs`: one stage as a small state machine: build the band and
+//!   system, run, then re-reference, or (converged) test the levels,
+//!   refine the elements, reweight clutter, refit the blur, settle, done.
+//! - `run.rs`: Gauss–Newton iterations on one reference and the stopping
+//!   rule (`crate::correlation` makes each iteration).
+//! - `refine.rs`, `robust.rs`, `blur.rs`: the element refinement, the
+//!   robust weights, the edge's blur and the pixel-edge stage's band.
+//! - `reference.rs`: a converged curve as the next reference.
+//! - `output.rs`: the measured curve and its samples with `sigma`.
+//! - [`breaks`], [`grow`], `track.rs`: corners, growing a short start,
+//!   the tracking schedule of a sequence's frames.
+//!
 //! ```no_run
 //! use vicurve::{fit::{measure, FitConfig}, curve::InitialCurve, io::load_image};
 //! let image = load_image("part.png".as_ref())?;
