@@ -132,6 +132,30 @@ impl StageState {
     }
 }
 
+/// A value, or how the stage ends instead.
+type OrFlow<T> = std::result::Result<T, Flow>;
+
+/// A run's system as it was built or taken from the tracking cache.
+struct Acquired {
+    corr: Correlation,
+    /// The displacement basis the run starts with.
+    basis: Basis,
+    /// Pixels of its band.
+    band_pixels: usize,
+    /// A kept band's displacement and change.
+    kept: Option<KeptStart>,
+}
+
+/// A run's system and coefficients after the stage's checks.
+struct Checked {
+    corr: Correlation,
+    lambda: Vec<f64>,
+}
+
+/// A kept band's displacement and its change over the last frame (see
+/// `TrackCache`).
+type KeptStart = (Vec<f64>, Option<Vec<f64>>);
+
 /// After one run: another, or the stage's end.
 enum Next {
     /// Another run, on the new reference.
@@ -206,61 +230,17 @@ impl Schedule<'_> {
         let profile = pushed.unwrap_or(Profile::Paper {
             kind: self.config.kind,
         });
-        // A kept band serves the frame's first run.
-        let reused = match (st.iterations, st.rereferences) {
-            (0, 0) => self.reuse.take(),
-            _ => None,
-        };
-        let (mut corr, basis, band_pixels, kept) = match reused {
-            Some(kept) => {
-                let track::Kept {
-                    mut corr,
-                    lambda,
-                    velocity,
-                    ..
-                } = *kept;
-                let basis = corr.basis().clone();
-                corr.reload(self.sampler)?;
-                let pixels = corr.band().len();
-                (corr, basis, pixels, Some((lambda, velocity)))
-            }
-            None => {
-                let length = self.current.param_length();
-                let n_elements = st
-                    .fixed_elements
-                    .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
-                let basis =
-                    breaks::displacement_basis(&self.current, self.config.degree, n_elements)?;
-                match self.build_system(st, &basis, profile, pushed)? {
-                    Ok((corr, pixels)) => (corr, basis, pixels, None),
-                    Err(flow) => return Ok(Next::Exit(flow)),
-                }
-            }
+        let Acquired {
+            mut corr,
+            basis,
+            band_pixels,
+            kept,
+        } = match self.run_system(st, profile, pushed)? {
+            Ok(system) => system,
+            Err(flow) => return Ok(Next::Exit(flow)),
         };
         let mut lambda = self.start_run(st, &mut corr, kept);
-        // A band with a margin needs no settle (see `track::TRACK_MARGIN`).
-        let windowed = corr.band().margin() > 0.0;
-        // A run that a settle is sure to follow only places its reference.
-        let pre_settle = self.auto && st.is_last && !st.followed && st.settles == 0 && !windowed;
-        let tolerance = if pre_settle {
-            self.config.tolerance.max(PRE_SETTLE_TOLERANCE)
-        } else {
-            self.config.tolerance
-        };
-        // A windowed band serves displacements within its margin.
-        let rereference = if st.rereferences >= MAX_REREFERENCES {
-            f64::INFINITY
-        } else if windowed {
-            corr.band().margin()
-        } else {
-            self.config.rereference_fraction * r
-        };
-        let limits = RunLimits {
-            budget: self.config.max_iterations.saturating_sub(st.iterations),
-            tolerance,
-            rereference,
-            half_width: r,
-        };
+        let (limits, windowed) = self.limits(st, &corr);
         let before = st.history.len();
         let (end, used) = iterate_to_end(
             &mut corr,
@@ -292,9 +272,98 @@ impl Schedule<'_> {
             profile,
             pushed,
             band_pixels,
-            tolerance,
+            tolerance: limits.tolerance,
             windowed,
         };
+        self.after_run(st, end, system, lambda)
+    }
+
+    /// The system of a run: the kept band's for a tracked frame's first
+    /// run when the cache serves (with the displacement it keeps and its
+    /// last change), else a band and system built on the current
+    /// reference; or how the stage ends when none can be built.
+    fn run_system(
+        &mut self,
+        st: &mut StageState,
+        profile: Profile,
+        pushed: Option<Profile>,
+    ) -> Result<OrFlow<Acquired>> {
+        // A kept band serves the frame's first run.
+        let reused = match (st.iterations, st.rereferences) {
+            (0, 0) => self.reuse.take(),
+            _ => None,
+        };
+        if let Some(kept) = reused {
+            let track::Kept {
+                mut corr,
+                lambda,
+                velocity,
+                ..
+            } = *kept;
+            let basis = corr.basis().clone();
+            corr.reload(self.sampler)?;
+            let pixels = corr.band().len();
+            return Ok(Ok(Acquired {
+                corr,
+                basis,
+                band_pixels: pixels,
+                kept: Some((lambda, velocity)),
+            }));
+        }
+        let length = self.current.param_length();
+        let n_elements = st
+            .fixed_elements
+            .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
+        let basis = breaks::displacement_basis(&self.current, self.config.degree, n_elements)?;
+        Ok(self
+            .build_system(st, &basis, profile, pushed)?
+            .map(|(corr, band_pixels)| Acquired {
+                corr,
+                basis,
+                band_pixels,
+                kept: None,
+            }))
+    }
+
+    /// Where a run on `corr` stops, and whether its band is windowed (a
+    /// tracked band, which needs no settle: see `track::TRACK_MARGIN`).
+    fn limits(&self, st: &StageState, corr: &Correlation) -> (RunLimits, bool) {
+        let r = st.stage.half_width;
+        let windowed = corr.band().margin() > 0.0;
+        // A run that a settle is sure to follow only places its reference.
+        let pre_settle = self.auto && st.is_last && !st.followed && st.settles == 0 && !windowed;
+        let tolerance = if pre_settle {
+            self.config.tolerance.max(PRE_SETTLE_TOLERANCE)
+        } else {
+            self.config.tolerance
+        };
+        // A windowed band serves displacements within its margin.
+        let rereference = if st.rereferences >= MAX_REREFERENCES {
+            f64::INFINITY
+        } else if windowed {
+            corr.band().margin()
+        } else {
+            self.config.rereference_fraction * r
+        };
+        let limits = RunLimits {
+            budget: self.config.max_iterations.saturating_sub(st.iterations),
+            tolerance,
+            rereference,
+            half_width: r,
+        };
+        (limits, windowed)
+    }
+
+    /// What follows a run that ended as `end`: a new reference, the
+    /// stage's failure, or the converged run's checks ([`Self::end_run`]).
+    fn after_run(
+        &mut self,
+        st: &mut StageState,
+        end: Run,
+        system: RunSystem,
+        lambda: Vec<f64>,
+    ) -> Result<Next> {
+        let r = st.stage.half_width;
         match end {
             Run::Rereference => {
                 let spacing = reference_spacing(system.corr.basis());
@@ -329,7 +398,7 @@ impl Schedule<'_> {
         basis: &Basis,
         profile: Profile,
         pushed: Option<Profile>,
-    ) -> Result<std::result::Result<(Correlation, usize), Flow>> {
+    ) -> Result<OrFlow<(Correlation, usize)>> {
         let r = st.stage.half_width;
         let first_band = self.last.is_none() && st.iterations == 0;
         // Coarse stages (all but the last) only bring the curve near the
@@ -447,7 +516,7 @@ impl Schedule<'_> {
         &mut self,
         st: &mut StageState,
         corr: &mut Correlation,
-        kept: Option<(Vec<f64>, Option<Vec<f64>>)>,
+        kept: Option<KeptStart>,
     ) -> Vec<f64> {
         if corr.noise_var().is_none() {
             corr.set_noise_var(st.stage_noise);
@@ -517,8 +586,36 @@ impl Schedule<'_> {
             tolerance,
             windowed,
         } = system;
-        let r = st.stage.half_width;
         self.outcome = o;
+        let checked = self.stage_checks(st, o, (corr, lambda), (&basis, profile, tolerance))?;
+        (corr, lambda) = (checked.corr, checked.lambda);
+        let again = self.refit_blur(st, &corr, &lambda, (pushed, o));
+        let settle = self.settles(st, &lambda, o, windowed, again);
+        if again || settle {
+            let spacing = corr.basis().element_length().max(CURVE_SPACING);
+            self.move_reference(st, corr.basis(), &lambda, spacing)?;
+            st.settles += 1;
+            return Ok(Next::Again);
+        }
+        if let (None, Some(_)) = (corr.noise_var(), st.step) {
+            corr.estimate_noise(&lambda, self.sampler);
+        }
+        self.complete(st, (corr, lambda), (profile, band_pixels), o)?;
+        Ok(Next::Exit(Flow::Completed))
+    }
+
+    /// The checks a stage makes on its converged runs: varying levels
+    /// dropped when they explain no more than noise would (once per
+    /// stage), the elements refined (once), the band probed for clutter
+    /// and reweighted, the stage's noise estimate kept.
+    fn stage_checks(
+        &mut self,
+        st: &mut StageState,
+        o: Outcome,
+        (mut corr, mut lambda): (Correlation, Vec<f64>),
+        (basis, profile, tolerance): (&Basis, Profile, f64),
+    ) -> Result<Checked> {
+        let r = st.stage.half_width;
         // Varying levels that explain no more than noise would are dropped
         // (they cost precision): this stage runs once more with the global
         // pair, and so do the next.
@@ -526,7 +623,7 @@ impl Schedule<'_> {
         st.levels_tested |= test_levels;
         if test_levels && corr.varying_levels() && !corr.levels_significant(&lambda, self.sampler) {
             self.config.levels = LevelModel::Global;
-            self.refit_global(st, (&mut corr, &mut lambda), &basis, tolerance);
+            self.refit_global(st, (&mut corr, &mut lambda), basis, tolerance);
         }
         let auto_elements = matches!(st.stage.elements, Elements::Auto { .. });
         if let (Elements::Auto { shortest, .. }, Some(step), None) =
@@ -566,20 +663,20 @@ impl Schedule<'_> {
         if st.cluttered == Some(false) && st.stage_noise.is_none() {
             st.stage_noise = corr.noise_var();
         }
-        let again = self.refit_blur(st, &corr, &lambda, (pushed, o));
-        let settle = self.settles(st, &lambda, o, windowed, again);
-        if again || settle {
-            let spacing = corr.basis().element_length().max(CURVE_SPACING);
-            self.move_reference(st, corr.basis(), &lambda, spacing)?;
-            st.settles += 1;
-            return Ok(Next::Again);
-        }
-        if let (None, Some(_)) = (corr.noise_var(), st.step) {
-            corr.estimate_noise(&lambda, self.sampler);
-        }
-        // The next stage's reference, or the curve the edge's spread is
-        // measured on after the last stage; the tracking schedule's one
-        // stage needs neither.
+        Ok(Checked { corr, lambda })
+    }
+
+    /// The stage is done: its report, and its result as the schedule's
+    /// last, the converged curve becoming the next stage's reference (or
+    /// the curve the edge's spread is measured on after the last stage;
+    /// the tracking schedule's one stage needs neither).
+    fn complete(
+        &mut self,
+        st: &mut StageState,
+        (corr, lambda): (Correlation, Vec<f64>),
+        (profile, band_pixels): (Profile, usize),
+        o: Outcome,
+    ) -> Result<()> {
         let next = if self.tracked.is_some() && st.is_last {
             None
         } else {
@@ -595,7 +692,7 @@ impl Schedule<'_> {
         let report = st.report(profile, corr.basis(), band_pixels, o);
         self.reports.push(report);
         self.last = Some(Final {
-            half_width: r,
+            half_width: st.stage.half_width,
             profile,
             reference: match next {
                 Some(next) => std::mem::replace(&mut self.current, next),
@@ -604,7 +701,7 @@ impl Schedule<'_> {
             corr,
             lambda,
         });
-        Ok(Next::Exit(Flow::Completed))
+        Ok(())
     }
 
     /// The run again with the global pair of levels (already set in the
