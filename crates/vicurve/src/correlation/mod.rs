@@ -109,6 +109,29 @@ struct Accumulator {
 }
 
 impl Accumulator {
+    /// Accumulators for a band of `len` pixels in fixed chunks (two per
+    /// thread, at most 64), `n` unknowns.
+    fn chunks(len: usize, n: usize) -> Vec<Accumulator> {
+        let chunks = (rayon::current_num_threads() * 2).clamp(1, 64);
+        let per = len.div_ceil(chunks);
+        (0..chunks)
+            .map(|k| Accumulator {
+                start: (k * per).min(len),
+                end: ((k + 1) * per).min(len),
+                f_proj: vec![0.0; n],
+                g_proj: vec![0.0; n],
+                d_proj: vec![0.0; n],
+                sum_f: 0.0,
+                sum_g: 0.0,
+                sum_gg: 0.0,
+                sum_fg: 0.0,
+                sum_ff: 0.0,
+                outside: None,
+                outside_count: 0,
+            })
+            .collect()
+    }
+
     /// Zero the sums for a new pass.
     fn clear(&mut self) {
         self.f_proj.iter_mut().for_each(|v| *v = 0.0);
@@ -121,6 +144,65 @@ impl Accumulator {
         self.sum_ff = 0.0;
         self.outside = None;
         self.outside_count = 0;
+    }
+}
+
+/// What depends on the reference only: `M0`, `G1_i = sum dg N_i`,
+/// `G2_i = sum gamma dg N_i` and the sums of `w`, `w gamma`, `w gamma^2`.
+struct Constants {
+    m: SymBandMatrix,
+    g1: Vec<f64>,
+    g2: Vec<f64>,
+    sums: [f64; 3],
+}
+
+impl Constants {
+    /// Assembled over fixed chunks of the band's pixels in parallel
+    /// (`solver::chunked`, so the sums do not depend on the threads).
+    fn assemble(band: &Band, basis: &Basis) -> Result<Self> {
+        let n = basis.n_functions();
+        let p = basis.degree();
+        let zero = SymBandMatrix::zeros(n, p, basis.is_closed())?;
+        let (m, g1, g2, sums) = chunked_sum(
+            band.len(),
+            |range| {
+                let mut m = zero.clone();
+                let mut g1 = vec![0.0; n];
+                let mut g2 = vec![0.0; n];
+                let mut sums = [0.0; 3];
+                for i in range {
+                    let w = band.weight[i];
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let first = band.first[i] as usize;
+                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                    let dg = band.dgamma[i];
+                    let g = band.gamma[i];
+                    sums[0] += w;
+                    sums[1] += w * g;
+                    sums[2] += w * g * g;
+                    for (a, va) in vals.iter().enumerate() {
+                        let ia = basis.index(first, a);
+                        g1[ia] += w * dg * va;
+                        g2[ia] += w * g * dg * va;
+                    }
+                    m.add_outer(first, w * dg * dg, vals);
+                }
+                (m, g1, g2, sums)
+            },
+            |t, part| {
+                t.0.add_matrix(&part.0);
+                t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
+                t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
+                t.3.iter_mut().zip(part.3).for_each(|(a, b)| *a += b);
+            },
+        )
+        .ok_or(Error::EmptyBand {
+            pixels: band.len(),
+            unknowns: n + 2,
+        })?;
+        Ok(Constants { m, g1, g2, sums })
     }
 }
 
@@ -305,61 +387,20 @@ impl Correlation {
         // window it on the displaced curve.
         band.window_at_reference();
         let n = basis.n_functions();
-        let p = basis.degree();
         if band.len() < 2 * n + 2 {
             return Err(Error::EmptyBand {
                 pixels: band.len(),
                 unknowns: n + 2,
             });
         }
-        // Assembled over fixed chunks of pixels in parallel (`solver::chunked`).
-        let zero = SymBandMatrix::zeros(n, p, basis.is_closed())?;
-        let (m, g1, g2, [sum_w, sum_g, sum_gg]) = chunked_sum(
-            band.len(),
-            |range| {
-                let mut m = zero.clone();
-                let mut g1 = vec![0.0; n];
-                let mut g2 = vec![0.0; n];
-                let mut sums = [0.0; 3];
-                for i in range {
-                    let w = band.weight[i];
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let first = band.first[i] as usize;
-                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-                    let dg = band.dgamma[i];
-                    let g = band.gamma[i];
-                    sums[0] += w;
-                    sums[1] += w * g;
-                    sums[2] += w * g * g;
-                    for (a, va) in vals.iter().enumerate() {
-                        let ia = basis.index(first, a);
-                        g1[ia] += w * dg * va;
-                        g2[ia] += w * g * dg * va;
-                    }
-                    m.add_outer(first, w * dg * dg, vals);
-                }
-                (m, g1, g2, sums)
-            },
-            |t, part| {
-                t.0.add_matrix(&part.0);
-                t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
-                t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
-                t.3.iter_mut().zip(part.3).for_each(|(a, b)| *a += b);
-            },
-        )
-        .ok_or(Error::EmptyBand {
-            pixels: band.len(),
-            unknowns: n + 2,
-        })?;
+        let Constants { m, g1, g2, sums } = Constants::assemble(&band, &basis)?;
+        let [count, sum_g, sum_gg] = sums;
         let chol = BandCholesky::factor(&m)?;
         let mut y1 = g1.clone();
         let mut y2 = g2.clone();
         chol.solve_in_place(&mut y1);
         chol.solve_in_place(&mut y2);
         let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
-        let count = sum_w;
         let k = [
             count - dot(&g1, &y1),
             sum_g - dot(&g1, &y2),
@@ -372,24 +413,7 @@ impl Correlation {
             return Err(Error::NotPositiveDefinite { index: n });
         }
         let k_inv = [k[3] / det, -k[1] / det, -k[2] / det, k[0] / det];
-        let chunks = (rayon::current_num_threads() * 2).clamp(1, 64);
-        let per = band.len().div_ceil(chunks);
-        let acc = (0..chunks)
-            .map(|k| Accumulator {
-                start: (k * per).min(band.len()),
-                end: ((k + 1) * per).min(band.len()),
-                f_proj: vec![0.0; n],
-                g_proj: vec![0.0; n],
-                d_proj: vec![0.0; n],
-                sum_f: 0.0,
-                sum_g: 0.0,
-                sum_gg: 0.0,
-                sum_fg: 0.0,
-                sum_ff: 0.0,
-                outside: None,
-                outside_count: 0,
-            })
-            .collect();
+        let acc = Accumulator::chunks(band.len(), n);
         let band_len = band.len();
         let varying = levels
             .basis(basis.length(), basis.is_closed())

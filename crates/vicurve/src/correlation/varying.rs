@@ -95,56 +95,8 @@ impl Varying {
     pub fn new(band: &Band, basis: &Basis, chol: &BandCholesky, lb: Basis) -> Result<Varying> {
         let levels = LevelBasis::new(lb, &band.s);
         let n = basis.n_functions();
-        let p = basis.degree();
-        let m = levels.m();
         let dim = levels.dim();
-        let width = levels.width();
-        // Assembled over fixed chunks of pixels in parallel (`solver::chunked`).
-        let sums = chunked_sum(
-            band.len(),
-            |range| {
-                let mut b = vec![0.0; n * dim];
-                let mut s_blocks = vec![0.0; levels.blocks_len()];
-                let mut dden = vec![0.0; n];
-                let mut tmp = vec![0.0; dim];
-                for i in range {
-                    let w = band.weight[i];
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let (g, dg) = (band.gamma[i], band.dgamma[i]);
-                    let feats = features(g);
-                    levels.accumulate(i, w, feats, 0.0, Some(&mut s_blocks), &mut tmp);
-                    let first = band.first[i] as usize;
-                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-                    let lfirst = levels.first[i] as usize;
-                    let lvals = &levels.vals[i * width..(i + 1) * width];
-                    for (a, va) in vals.iter().enumerate() {
-                        let ia = basis.index(first, a);
-                        dden[ia] += w * dg * dg * va;
-                        for (k, vk) in lvals.iter().enumerate() {
-                            let j = levels.basis.index(lfirst, k);
-                            let x = w * dg * va * vk;
-                            for (f, phi) in feats.iter().enumerate() {
-                                b[(f * m + j) * n + ia] += x * phi;
-                            }
-                        }
-                    }
-                }
-                (b, s_blocks, dden)
-            },
-            |t, part| {
-                t.0.iter_mut().zip(&part.0).for_each(|(a, b)| *a += b);
-                t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
-                t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
-            },
-        );
-        let Some((b, s_blocks, dden)) = sums else {
-            return Err(Error::EmptyBand {
-                pixels: 0,
-                unknowns: n + dim,
-            });
-        };
+        let (b, s_blocks, dden) = assemble(band, basis, &levels)?;
         let mut s_mat = vec![0.0; dim * dim];
         levels.scatter(&s_blocks, &mut s_mat);
         let mut y = b.clone();
@@ -272,6 +224,65 @@ impl Varying {
     pub fn levels_at(&self, u: f64) -> (f64, f64) {
         self.levels.levels_at(u, &self.theta)
     }
+}
+
+/// The levels' constant parts for `band`, assembled over fixed chunks of
+/// pixels in parallel (`solver::chunked`): `B` (column-major, one column of
+/// `n` per coefficient), the levels' normal matrix `S` as per-element
+/// blocks, and the row sums of `M0`.
+fn assemble(
+    band: &Band,
+    basis: &Basis,
+    levels: &LevelBasis,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let n = basis.n_functions();
+    let p = basis.degree();
+    let m = levels.m();
+    let dim = levels.dim();
+    let width = levels.width();
+    let sums = chunked_sum(
+        band.len(),
+        |range| {
+            let mut b = vec![0.0; n * dim];
+            let mut s_blocks = vec![0.0; levels.blocks_len()];
+            let mut dden = vec![0.0; n];
+            let mut tmp = vec![0.0; dim];
+            for i in range {
+                let w = band.weight[i];
+                if w == 0.0 {
+                    continue;
+                }
+                let (g, dg) = (band.gamma[i], band.dgamma[i]);
+                let feats = features(g);
+                levels.accumulate(i, w, feats, 0.0, Some(&mut s_blocks), &mut tmp);
+                let first = band.first[i] as usize;
+                let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
+                let lfirst = levels.first[i] as usize;
+                let lvals = &levels.vals[i * width..(i + 1) * width];
+                for (a, va) in vals.iter().enumerate() {
+                    let ia = basis.index(first, a);
+                    dden[ia] += w * dg * dg * va;
+                    for (k, vk) in lvals.iter().enumerate() {
+                        let j = levels.basis.index(lfirst, k);
+                        let x = w * dg * va * vk;
+                        for (f, phi) in feats.iter().enumerate() {
+                            b[(f * m + j) * n + ia] += x * phi;
+                        }
+                    }
+                }
+            }
+            (b, s_blocks, dden)
+        },
+        |t, part| {
+            t.0.iter_mut().zip(&part.0).for_each(|(a, b)| *a += b);
+            t.1.iter_mut().zip(&part.1).for_each(|(a, b)| *a += b);
+            t.2.iter_mut().zip(&part.2).for_each(|(a, b)| *a += b);
+        },
+    );
+    sums.ok_or(Error::EmptyBand {
+        pixels: 0,
+        unknowns: n + dim,
+    })
 }
 
 /// What a pass over the band reads besides the levels' state.
