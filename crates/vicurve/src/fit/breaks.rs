@@ -264,13 +264,36 @@ pub(crate) fn displaced_samples(
         let pts = params.par_iter().map(|&u| at(u)).collect();
         return (params, pts, Vec::new());
     }
-    // Pieces between consecutive bounds; the corner after each piece.
+    let starts_at_corner = closed && corners[0] == 0.0;
+    let (mut pieces, after) = corner_pieces(reference, step, &at);
+    let meet = trim_at_corners(reference, basis, lambda, &mut pieces, &after);
+    let seq = in_order(&pieces, &meet, starts_at_corner);
+    fill_gaps(&seq, closed, step)
+}
+
+/// Points `(parameter, point)` of a piece of the displaced curve.
+type Piece = Vec<(f64, [f64; 2])>;
+/// Where two pieces meet at a corner: its parameter and point.
+type Meeting = Option<(f64, [f64; 2])>;
+
+/// The displaced curve's points (`at`) about `step` apart on the pieces
+/// between `reference`'s corners, the corners themselves left out; and the
+/// corner after each piece (`None`: the end of an open curve, or of a
+/// closed one that does not start at a corner).
+fn corner_pieces(
+    reference: &SplineCurve,
+    step: f64,
+    at: &(impl Fn(f64) -> [f64; 2] + Sync),
+) -> (Vec<Piece>, Vec<Option<f64>>) {
+    let l = reference.param_length();
+    let closed = reference.is_closed();
+    let corners = reference.corners();
     let starts_at_corner = closed && corners[0] == 0.0;
     let mut bounds = vec![0.0];
     bounds.extend(corners.iter().copied().filter(|&c| c > 0.0));
     bounds.push(l);
     let is_corner = |u: f64| corners.contains(&u) || (closed && u == l && starts_at_corner);
-    let mut pieces: Vec<Vec<(f64, [f64; 2])>> = Vec::new();
+    let mut pieces: Vec<Piece> = Vec::new();
     let mut after: Vec<Option<f64>> = Vec::new();
     for (i, w) in bounds.windows(2).enumerate() {
         let (a, b) = (w[0], w[1]);
@@ -294,13 +317,25 @@ pub(crate) fn displaced_samples(
             Some(b)
         });
     }
+    (pieces, after)
+}
+
+/// The meeting point of the two sides of each corner (`after`, see
+/// [`corner_pieces`]), with what overshoots it on either side trimmed off
+/// the pieces.
+fn trim_at_corners(
+    reference: &SplineCurve,
+    basis: &Basis,
+    lambda: &[f64],
+    pieces: &mut [Piece],
+    after: &[Option<f64>],
+) -> Vec<Meeting> {
     let np = pieces.len();
     let mut meet = vec![None; np];
     for i in 0..np {
         let Some(c) = after[i] else { continue };
         let (q, tl, tr) = meeting_point(reference, basis, lambda, c);
         let ahead = |p: [f64; 2], t: [f64; 2]| (p[0] - q[0]) * t[0] + (p[1] - q[1]) * t[1];
-        // Trim what overshoots the meeting point on either side.
         while pieces[i].last().is_some_and(|x| ahead(x.1, tl) >= 0.0) {
             pieces[i].pop();
         }
@@ -312,7 +347,16 @@ pub(crate) fn displaced_samples(
         pieces[j].drain(..head);
         meet[i] = Some((c, q));
     }
-    // In order: (parameter, point, is a corner).
+    meet
+}
+
+/// The pieces and corners in order: `(parameter, point, is a corner)`.
+fn in_order(
+    pieces: &[Piece],
+    meet: &[Meeting],
+    starts_at_corner: bool,
+) -> Vec<(f64, [f64; 2], bool)> {
+    let np = pieces.len();
     let mut seq: Vec<(f64, [f64; 2], bool)> = Vec::new();
     if starts_at_corner {
         if let Some((c, q)) = meet[np - 1] {
@@ -327,8 +371,18 @@ pub(crate) fn displaced_samples(
             }
         }
     }
-    // A side that falls short of its meeting point is extended by a
-    // straight segment, sampled like the rest.
+    seq
+}
+
+/// The parameters and points of `seq` (see [`in_order`]), with the indices
+/// of its corners: a side that falls short of its corner is extended by a
+/// straight segment, sampled about `step` apart like the rest (the fill
+/// takes the corner's parameter, for `sigma` and the levels there).
+fn fill_gaps(
+    seq: &[(f64, [f64; 2], bool)],
+    closed: bool,
+    step: f64,
+) -> (Vec<f64>, Vec<[f64; 2]>, Vec<usize>) {
     let mut params = Vec::with_capacity(seq.len());
     let mut pts = Vec::with_capacity(seq.len());
     let mut corner_idx = Vec::new();
@@ -350,7 +404,6 @@ pub(crate) fn displaced_samples(
         }
         let gap = (q[0] - p[0]).hypot(q[1] - p[1]);
         let fill = (gap / step).floor() as usize;
-        // The fill takes the corner's parameter (sigma, levels there).
         let c = if corner { u } else { seq[(i + 1) % n].0 };
         for k in 1..fill {
             let t = k as f64 / fill as f64;
