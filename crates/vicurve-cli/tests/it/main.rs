@@ -2,4 +2,10 @@
 //! `common`.
 
 mod common;
+
+mod cli;
+mod diagnostics;
+mod export;
 mod golden;
+mod start;
+mod track;

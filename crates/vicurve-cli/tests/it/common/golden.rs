@@ -5,6 +5,7 @@
 //! `REGENERATE=1 cargo test -p vicurve-cli --test it golden` rewrites the
 //! copies on purpose (review the diff before committing it).
 
+use super::split_cells;
 use std::path::{Path, PathBuf};
 
 /// Largest difference accepted between a number and its golden copy,
@@ -145,25 +146,4 @@ fn csv_diff(expected: &str, actual: &str, out: &mut Vec<String>) {
             }
         }
     }
-}
-
-/// The cells of one CSV line (quoted cells may hold commas and `""`).
-pub fn split_cells(line: &str) -> Vec<String> {
-    let mut cells = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => cells.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    cells.push(cur);
-    cells
 }

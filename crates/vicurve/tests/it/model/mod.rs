@@ -3,6 +3,8 @@
 //! angles); the figures each case reaches are printed (run with
 //! `--nocapture`) and recorded in docs/benchmarks.md.
 
+mod bspline_curve;
+
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig, Outcome};
 use vicurve::model::{
@@ -11,10 +13,11 @@ use vicurve::model::{
 use vicurve::render::blur::gaussian_blur;
 use vicurve::render::coverage::polygon_coverage;
 use vicurve::render::noise::{add_gaussian_noise, quantise};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::render;
 use vicurve::truth::Shape;
-use vicurve::virtual_image::Kind;
 use vicurve::{Error, Image};
+
+use crate::common::spec;
 
 /// The B-spline measurement from `init`, then the model.
 fn fit_with(
@@ -38,30 +41,6 @@ fn value(f: &ModelFit, name: &str) -> f64 {
 
 fn sigma(f: &ModelFit, name: &str) -> f64 {
     f.parameter(name).expect(name).sigma
-}
-
-fn spec(
-    shape: Shape,
-    size: usize,
-    blur: f64,
-    noise: f64,
-    seed: u64,
-    bits: Option<u8>,
-) -> RenderSpec {
-    RenderSpec {
-        width: size,
-        height: size,
-        shape,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: blur,
-        noise,
-        seed,
-        bits,
-        ..RenderSpec::default()
-    }
 }
 
 /// A polygon (counterclockwise on screen) painted by exact coverage, gray
@@ -137,7 +116,7 @@ fn circle_noiseless() {
         for (b, bits) in [8u8, 16].into_iter().enumerate() {
             let image = render(&spec(
                 Shape::Circle { cx, cy, r },
-                200,
+                (200, 200),
                 0.0,
                 0.0,
                 0,
@@ -197,7 +176,7 @@ fn ellipse_noiseless() {
             angle: truth[4],
         };
         for (b, bits) in [8u8, 16].into_iter().enumerate() {
-            let image = render(&spec(shape.clone(), 200, 0.0, 0.0, 0, Some(bits))).unwrap();
+            let image = render(&spec(shape.clone(), (200, 200), 0.0, 0.0, 0, Some(bits))).unwrap();
             let f = fit(
                 &image,
                 InitialCurve::Circle {
@@ -368,7 +347,7 @@ fn blurred_and_noisy() {
         let (cx, cy, r) = (100.37, 99.81, 70.3);
         let image = render(&spec(
             Shape::Circle { cx, cy, r },
-            200,
+            (200, 200),
             1.0,
             noise,
             5,
@@ -477,7 +456,7 @@ fn uncertainties_match_the_scatter() {
         for seed in 0..20 {
             let image = render(&spec(
                 Shape::Circle { cx, cy, r },
-                80,
+                (80, 80),
                 blur,
                 0.05,
                 seed,

@@ -1,51 +1,20 @@
 //! Automatic start: the silhouette found without a starting curve, and the
 //! measurement from it.
 
+mod ridge;
+
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, FitConfig, Measurement, Outcome};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::fit::{measure, FitConfig, Outcome};
+use vicurve::render::render;
 use vicurve::start::{find_silhouette, StartConfig};
 use vicurve::truth::{evaluate, Shape};
-use vicurve::virtual_image::Kind;
 use vicurve::{Error, Image};
 
-fn spec(width: usize, height: usize, shape: Shape, blur: f64, noise: f64) -> RenderSpec {
-    RenderSpec {
-        width,
-        height,
-        shape,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: blur,
-        noise,
-        seed: 5,
-        bits: Some(8),
-        ..RenderSpec::default()
-    }
-}
+use crate::common::{max_gap, spec};
 
-/// Largest distance from the samples of `a` to the curve of `b` (px).
-fn max_gap(a: &Measurement, b: &Measurement) -> f64 {
-    let pts = b.points();
-    let mut worst: f64 = 0.0;
-    for p in a.points() {
-        // Nearest sample of b (1 px apart) as the start of the projection.
-        let (k, _) = pts
-            .iter()
-            .enumerate()
-            .map(|(k, q)| (k, (q[0] - p[0]).hypot(q[1] - p[1])))
-            .fold(
-                (0, f64::INFINITY),
-                |acc, x| if x.1 < acc.1 { x } else { acc },
-            );
-        let u0 = b.samples[k].s;
-        let pr = b.curve.project(p[0], p[1], u0);
-        worst = worst.max(pr.r.abs());
-    }
-    worst
-}
+/// Noise seed and quantisation of the images these tests render.
+const SEED: u64 = 5;
+const BITS: Option<u8> = Some(8);
 
 /// The paper's figure 13 situation: the same star measured from two
 /// different starts (the automatic one and a circle that crosses it) gives
@@ -63,7 +32,7 @@ fn star_from_the_automatic_start_and_from_a_circle() {
         lobes: 5,
         phase: 0.4,
     };
-    let s = spec(600, 600, shape.clone(), 1.0, 0.0);
+    let s = spec(shape.clone(), (600, 600), 1.0, 0.0, SEED, BITS);
     let image = render(&s).unwrap();
     let start = find_silhouette(&image, &StartConfig::default()).unwrap();
     assert!(start.closed && start.bright, "{start:?}");
@@ -99,7 +68,7 @@ fn dark_disc_start_hugs_the_edge() {
         cy: 150.7,
         r: 90.0,
     };
-    let mut s = spec(320, 300, shape.clone(), 1.5, 0.05);
+    let mut s = spec(shape.clone(), (320, 300), 1.5, 0.05, SEED, BITS);
     (s.foreground, s.background) = (0.15, 0.9);
     let image = render(&s).unwrap();
     let start = find_silhouette(&image, &StartConfig::default()).unwrap();
@@ -136,7 +105,7 @@ fn edge_across_the_image_gives_an_open_start() {
         x_min: 0.0,
         x_max: 299.0,
     };
-    let image = render(&spec(300, 240, shape.clone(), 1.0, 0.01)).unwrap();
+    let image = render(&spec(shape.clone(), (300, 240), 1.0, 0.01, SEED, BITS)).unwrap();
     let start = find_silhouette(&image, &StartConfig::default()).unwrap();
     assert!(!start.closed);
     let InitialCurve::Polyline { points, .. } = &start.curve else {

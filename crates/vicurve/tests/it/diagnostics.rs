@@ -4,33 +4,23 @@
 use vicurve::curve::InitialCurve;
 use vicurve::diagnostics::{unwrap_band, UnwrapConfig, UnwrappedBand};
 use vicurve::fit::{measure, FitConfig, Measurement, Outcome};
-use vicurve::render::{render, Method, RenderSpec};
-use vicurve::truth::Shape;
-use vicurve::virtual_image::Kind;
+use vicurve::render::{render, RenderSpec};
 use vicurve::Image;
+
+use crate::common::disc;
 
 const INSIDE: f64 = 0.8;
 const OUTSIDE: f64 = 0.2;
 
-fn disc() -> (Image, Measurement, FitConfig) {
-    disc_blurred(0.0)
+fn measured_disc() -> (Image, Measurement, FitConfig) {
+    measured_disc_blurred(0.0)
 }
 
-fn disc_blurred(blur_sigma: f64) -> (Image, Measurement, FitConfig) {
+fn measured_disc_blurred(blur_sigma: f64) -> (Image, Measurement, FitConfig) {
     let spec = RenderSpec {
-        width: 200,
-        height: 200,
-        shape: Shape::Circle {
-            cx: 100.37,
-            cy: 99.71,
-            r: 60.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
         foreground: INSIDE,
         background: OUTSIDE,
-        blur_sigma,
-        ..RenderSpec::default()
+        ..disc(200, (100.37, 99.71, 60.0), blur_sigma, 0.0, 0, None)
     };
     let image = render(&spec).unwrap();
     let init = InitialCurve::Circle {
@@ -69,7 +59,7 @@ struct Summary {
 }
 
 fn summarise(blur: f64) -> Summary {
-    let (image, m, config) = disc_blurred(blur);
+    let (image, m, config) = measured_disc_blurred(blur);
     let b = unwrap_band(&image, &m, &config, &UnwrapConfig::default()).unwrap();
     let length = m.curve.param_length();
     assert_eq!(b.columns, (length / 0.5).floor() as usize);
@@ -176,7 +166,7 @@ fn blurred_disc_residual_is_the_fits() {
 /// near 1.
 #[test]
 fn a_line_across_the_edge_is_down_weighted() {
-    let (clean, _, config) = disc();
+    let (clean, _, config) = measured_disc();
     // A horizontal dark bar 3 px wide through the centre, across the
     // disc's edge on both sides.
     let bar = |y: usize| (y as f64 - 99.71).abs() < 1.5;
@@ -219,7 +209,7 @@ fn a_line_across_the_edge_is_down_weighted() {
 
 #[test]
 fn bad_grids_are_errors() {
-    let (image, m, config) = disc();
+    let (image, m, config) = measured_disc();
     for grid in [
         UnwrapConfig {
             ds: 0.0,

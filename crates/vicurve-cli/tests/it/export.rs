@@ -3,38 +3,8 @@
 //! bad inputs giving one line and exit 1.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn vicurve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vicurve"))
-        .args(args)
-        .output()
-        .expect("run vicurve")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn ok(out: &Output) {
-    assert!(out.status.success(), "stderr: {}", text(&out.stderr));
-}
-
-fn assert_error(out: &Output, needle: &str) {
-    let err = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "stderr: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
-    assert!(lines[0].starts_with("vicurve: error: "), "{err}");
-    assert!(
-        lines[0].to_lowercase().contains(&needle.to_lowercase()),
-        "'{needle}' not in: {err}"
-    );
-}
-
-fn p(dir: &Path, name: &str) -> String {
-    dir.join(name).display().to_string()
-}
+use crate::common::{assert_error, ok, p, text, vicurve};
 
 /// A 300x200 sinusoidal edge at mean row `y0`, measured from a segment;
 /// returns the result file.
@@ -198,23 +168,27 @@ fn bad_inputs_give_one_line() {
     std::fs::write(&garbage, "{ not json").unwrap();
     assert_error(
         &vicurve(&["export", &garbage, "--dxf", &p(d, "x.dxf")]),
+        1,
         "cannot parse",
     );
     assert_error(
         &vicurve(&["export", &p(d, "missing.json"), "--dxf", &p(d, "x.dxf")]),
+        1,
         "not found",
     );
-    assert_error(&vicurve(&["export", &top]), "nothing to write");
-    assert_error(&vicurve(&["mesh", &top, &garbage]), "cannot parse");
+    assert_error(&vicurve(&["export", &top]), 1, "nothing to write");
+    assert_error(&vicurve(&["mesh", &top, &garbage]), 1, "cannot parse");
     assert_error(
         &vicurve(&["mesh", &top, &top, "--refine-along", "0"]),
+        1,
         "refinement along",
     );
     assert_error(
         &vicurve(&["mesh", &top, &top, "--vtu-cells", "2x2"]),
+        1,
         "--vtu-cells",
     );
-    assert_error(&vicurve(&["mesh", &top, &top]), "same");
+    assert_error(&vicurve(&["mesh", &top, &top]), 1, "same");
     // A closed curve cannot bound the patch.
     let disc = p(d, "disc.png");
     ok(&vicurve(&[
@@ -229,7 +203,7 @@ fn bad_inputs_give_one_line() {
         "--out",
         &closed,
     ]));
-    assert_error(&vicurve(&["mesh", &top, &closed]), "closed");
+    assert_error(&vicurve(&["mesh", &top, &closed]), 1, "closed");
     // SVG cubic Béziers need degree <= 3: refused before measuring.
     assert_error(
         &vicurve(&[
@@ -242,6 +216,7 @@ fn bad_inputs_give_one_line() {
             "--svg-curve",
             &p(d, "c.svg"),
         ]),
+        1,
         "degree 5",
     );
     // A NaN in the result file (written as null) is a parse error.
@@ -253,11 +228,13 @@ fn bad_inputs_give_one_line() {
     std::fs::write(&nan, text).unwrap();
     assert_error(
         &vicurve(&["export", &nan, "--dxf", &p(d, "x.dxf")]),
+        1,
         "cannot parse",
     );
     // An unwritable output.
     assert_error(
         &vicurve(&["export", &top, "--dxf", &p(d, "no/such/dir/x.dxf")]),
+        1,
         "cannot write",
     );
 }

@@ -15,6 +15,8 @@ use vicurve::render::{render, Method, RenderSpec};
 use vicurve::truth::{evaluate, Kind, Shape};
 use vicurve::{Error, Image};
 
+use crate::common::spec;
+
 // ---------------------------------------------------------------- helpers
 
 /// Points of the ellipse of `Shape::Ellipse`'s convention (the `a` axis at
@@ -64,23 +66,6 @@ fn measured(spec: &RenderSpec, init: &InitialCurve) -> Measurement {
     let m = measure(&image, init, &FitConfig::default()).expect("measure");
     assert_eq!(m.outcome, Outcome::Converged);
     m
-}
-
-fn coverage_spec(shape: Shape, size: usize, blur: f64, noise: f64, seed: u64) -> RenderSpec {
-    RenderSpec {
-        width: size,
-        height: size,
-        shape,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: blur,
-        noise,
-        seed,
-        bits: Some(8),
-        ..RenderSpec::default()
-    }
 }
 
 // --------------------------------------------------- pure geometry: circle
@@ -315,7 +300,7 @@ fn measured_disc_and_ellipse_parameters() {
         (ellipse(199.63), 1.0),
     ] {
         let is_disc = matches!(shape, Shape::Circle { .. });
-        let spec = coverage_spec(shape.clone(), 400, blur, 0.0, 0);
+        let spec = spec(shape.clone(), (400, 400), blur, 0.0, 0, Some(8));
         let m = measured(&spec, if is_disc { &init_disc } else { &init });
         let c = closed_measures(&m).unwrap();
         let (tc, ta, tb, tangle) = match shape {
@@ -390,7 +375,7 @@ fn measured_disc_curvature() {
         r: 150.0,
     };
     let m = measured(
-        &coverage_spec(shape, 400, 1.0, 0.0, 0),
+        &spec(shape, (400, 400), 1.0, 0.0, 0, Some(8)),
         &InitialCurve::Circle {
             cx: 203.0,
             cy: 198.0,
@@ -431,7 +416,10 @@ fn measured_circle_deviations_match_noise_scatter() {
     };
     let draws: Vec<u64> = (1..=20).collect();
     let run = |seed: u64| {
-        let m = measured(&coverage_spec(shape.clone(), 120, 1.0, 0.1, seed), &init);
+        let m = measured(
+            &spec(shape.clone(), (120, 120), 1.0, 0.1, seed, Some(8)),
+            &init,
+        );
         let c = closed_measures(&m).unwrap().circle;
         let pts = m.points();
         let sig: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();

@@ -125,16 +125,15 @@ fn check_against_brute(shape: &Shape, q: [f64; 2], lo: f64, hi: f64) {
     assert!((along - d).abs() < 1e-8, "{along} vs {d}");
 }
 
-fn star() -> Shape {
-    Shape::Star {
-        cx: 60.3,
-        cy: 58.9,
-        r0: 40.0,
-        amplitude: 0.25,
-        lobes: 5,
-        phase: 0.4,
-    }
-}
+/// A five-lobed star, radius 40 +- 10 px.
+const STAR: Shape = Shape::Star {
+    cx: 60.3,
+    cy: 58.9,
+    r0: 40.0,
+    amplitude: 0.25,
+    lobes: 5,
+    phase: 0.4,
+};
 
 fn ellipse() -> Shape {
     Shape::Ellipse {
@@ -175,13 +174,13 @@ proptest! {
 
     #[test]
     fn star_matches_brute_force(x in 0.0f64..120.0, y in 0.0f64..120.0) {
-        check_against_brute(&star(), [x, y], 0.0, TAU);
+        check_against_brute(&STAR, [x, y], 0.0, TAU);
     }
 
     #[test]
     fn star_near_curve_matches_brute_force(s in 0.0f64..TAU, off in -6.0f64..6.0) {
         // Points near the curve, where the concave bays are.
-        let shape = star();
+        let shape = STAR;
         let p = param_point(&shape, s);
         let p2 = param_point(&shape, s + 1e-6);
         let t = [(p2[0] - p[0]) / 1e-6, (p2[1] - p[1]) / 1e-6];
@@ -275,7 +274,7 @@ fn sign_and_normal_conventions() {
 #[test]
 fn polyline_spacing_orientation_and_closure() {
     for shape in [
-        star(),
+        STAR,
         ellipse(),
         Shape::Circle {
             cx: 3.0,
@@ -357,7 +356,7 @@ fn lengths_and_areas() {
         "{} vs {perimeter}",
         ellipse().length()
     );
-    for (shape, lo, hi) in [(star(), 0.0, TAU), (sine(), 10.0, 90.0)] {
+    for (shape, lo, hi) in [(STAR, 0.0, TAU), (sine(), 10.0, 90.0)] {
         let fine = chord_length(&shape, lo, hi, 2_000_000);
         assert!(
             (shape.length() - fine).abs() / fine < 1e-9,
@@ -366,7 +365,7 @@ fn lengths_and_areas() {
         );
     }
     // Star area by an independent dense shoelace.
-    let shape = star();
+    let shape = STAR;
     let n = 200_000;
     let mut twice = 0.0;
     for i in 0..n {
@@ -383,7 +382,7 @@ fn lengths_and_areas() {
 fn min_curvature_radius() {
     // Star: brute force over the independent parametrisation by finite
     // differences of the turning angle.
-    let shape = star();
+    let shape = STAR;
     let n = 400_000;
     let mut best = f64::INFINITY;
     let h = TAU / n as f64;
@@ -501,13 +500,13 @@ fn validation_names_the_parameter() {
             other => panic!("{shape:?}: {other:?}"),
         }
     }
-    assert!(star().validate().is_ok() && sine().validate().is_ok());
+    assert!(STAR.validate().is_ok() && sine().validate().is_ok());
 }
 
 #[test]
 fn truth_json_round_trip() {
     let spec = RenderSpec {
-        shape: star(),
+        shape: STAR,
         kind: Kind::Contour,
         line_width: 2.5,
         method: Method::Coverage,

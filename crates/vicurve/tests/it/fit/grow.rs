@@ -5,51 +5,24 @@
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::grow::{grow, EndReason, GrowConfig, Grown};
-use vicurve::fit::{measure, FitConfig, Measurement, Outcome};
+use vicurve::fit::{measure, FitConfig, Outcome};
 use vicurve::interp::Sampler;
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::render;
 use vicurve::truth::{evaluate, Shape};
 use vicurve::virtual_image::Kind;
 use vicurve::{Error, Image};
 
-fn spec(width: usize, height: usize, shape: Shape, blur: f64, noise: f64) -> RenderSpec {
-    RenderSpec {
-        width,
-        height,
-        shape,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: blur,
-        noise,
-        seed: 11,
-        bits: Some(8),
-        ..RenderSpec::default()
-    }
-}
+use crate::common::{max_gap, spec};
+
+/// Noise seed and quantisation of the images these tests render.
+const SEED: u64 = 11;
+const BITS: Option<u8> = Some(8);
 
 fn grown(image: &Image, segment: [f64; 4], config: &FitConfig, g: &GrowConfig) -> Grown {
     let [x0, y0, x1, y1] = segment;
     let start = InitialCurve::Segment { x0, y0, x1, y1 }.to_curve().unwrap();
     let sampler = Sampler::new(image, config.interpolation);
     grow(&sampler, start, config, g).unwrap()
-}
-
-/// Largest distance from the samples of `a` to the curve of `b` (px).
-fn max_gap(a: &Measurement, b: &Measurement) -> f64 {
-    let pts = b.points();
-    let mut worst: f64 = 0.0;
-    for p in a.points() {
-        let k = (0..pts.len())
-            .min_by(|&i, &j| {
-                let d = |q: [f64; 2]| (q[0] - p[0]).hypot(q[1] - p[1]);
-                d(pts[i]).total_cmp(&d(pts[j]))
-            })
-            .unwrap();
-        worst = worst.max(b.curve.project(p[0], p[1], b.samples[k].s).r.abs());
-    }
-    worst
 }
 
 /// A 30 px segment on a star's edge grows all the way round and closes;
@@ -65,7 +38,7 @@ fn a_segment_on_a_star_grows_into_the_closed_star() {
         lobes: 5,
         phase: 0.3,
     };
-    let image = render(&spec(400, 400, shape.clone(), 1.0, 0.0)).unwrap();
+    let image = render(&spec(shape.clone(), (400, 400), 1.0, 0.0, SEED, BITS)).unwrap();
     // The star's rightmost point is near (200.4 + 120 (1 + 0.15 cos 0.3),
     // 199.7); a vertical segment through it, 2 px off the edge.
     let x = 200.4 + 120.0 * (1.0 + 0.15 * 0.3f64.cos()) - 2.0;
@@ -114,7 +87,7 @@ fn a_segment_on_an_open_edge_grows_to_both_borders() {
         x_min: 0.0,
         x_max: 499.0,
     };
-    let image = render(&spec(500, 300, shape.clone(), 1.5, 0.01)).unwrap();
+    let image = render(&spec(shape.clone(), (500, 300), 1.5, 0.01, SEED, BITS)).unwrap();
     let y = |x: f64| 150.3 + 25.0 * (std::f64::consts::TAU * x / 260.0 + 0.4).sin();
     let g = grown(
         &image,
@@ -252,7 +225,7 @@ fn growth_stops_at_the_length_asked() {
         cy: 159.6,
         r: 110.0,
     };
-    let image = render(&spec(320, 320, shape, 0.8, 0.0)).unwrap();
+    let image = render(&spec(shape, (320, 320), 0.8, 0.0, SEED, BITS)).unwrap();
     let g = grown(
         &image,
         [268.0, 175.0, 268.0, 145.0],
@@ -275,15 +248,16 @@ fn growth_stops_at_the_length_asked() {
 #[test]
 fn errors_name_the_problem() {
     let image = render(&spec(
-        200,
-        200,
         Shape::Circle {
             cx: 100.0,
             cy: 100.0,
             r: 60.0,
         },
+        (200, 200),
         0.0,
         0.0,
+        SEED,
+        BITS,
     ))
     .unwrap();
     let sampler = Sampler::new(&image, FitConfig::default().interpolation);

@@ -3,11 +3,20 @@
 //! case reaches are printed (run with `--nocapture`) and recorded in
 //! docs/benchmarks.md.
 
+mod breaks;
+mod grow;
+mod levels;
+mod robust;
+mod track;
+mod uncertainty;
+
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage};
 use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::truth::{evaluate, ErrorStats, Shape};
 use vicurve::virtual_image::{Kind, Profile};
+
+use crate::common::disc;
 
 fn stages(list: &[(f64, Elements)]) -> Option<Vec<Stage>> {
     Some(
@@ -29,21 +38,8 @@ fn run(spec: &RenderSpec, init: InitialCurve, config: FitConfig) -> (Measurement
 
 fn disc_spec(r: f64, method: Method, noise: f64) -> RenderSpec {
     RenderSpec {
-        width: 400,
-        height: 400,
-        shape: Shape::Circle {
-            cx: 200.37,
-            cy: 199.71,
-            r,
-        },
-        kind: Kind::Silhouette,
         method,
-        foreground: 0.8,
-        background: 0.2,
-        noise,
-        seed: 7,
-        bits: Some(8),
-        ..RenderSpec::default()
+        ..disc(400, (200.37, 199.71, r), 0.0, noise, 7, Some(8))
     }
 }
 

@@ -4,33 +4,26 @@ use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig};
 use vicurve::interp::{Interpolation, Sampler};
 use vicurve::psf::{curvature_shift, edge_spread};
-use vicurve::render::{render, Method, RenderSpec};
-use vicurve::truth::{evaluate, Shape};
+use vicurve::render::{render, RenderSpec};
+use vicurve::truth::evaluate;
 use vicurve::virtual_image::Kind;
 
-fn disc(blur: f64) -> RenderSpec {
+use crate::common::disc;
+
+/// The disc these tests measure: 240x240, radius 70 px, gray 0.85 on
+/// 0.15, blur `blur` px, noiseless, 16 bits.
+fn scene(blur: f64) -> RenderSpec {
     RenderSpec {
-        width: 240,
-        height: 240,
-        shape: Shape::Circle {
-            cx: 120.3,
-            cy: 119.6,
-            r: 70.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
         foreground: 0.85,
         background: 0.15,
-        blur_sigma: blur,
-        bits: Some(16),
-        ..RenderSpec::default()
+        ..disc(240, (120.3, 119.6, 70.0), blur, 0.0, 0, Some(16))
     }
 }
 
 #[test]
 fn the_spread_of_a_blurred_edge_is_its_blur_and_the_pixel() {
     for blur in [0.0, 0.5, 1.0, 2.0] {
-        let image = render(&disc(blur)).unwrap();
+        let image = render(&scene(blur)).unwrap();
         let sampler = Sampler::new(&image, Interpolation::CubicBSpline);
         let curve = InitialCurve::Circle {
             cx: 120.3,
@@ -78,7 +71,7 @@ fn the_shift_points_to_the_centre_of_curvature() {
 #[test]
 fn correction_removes_the_blur_bias_on_discs() {
     for blur in [1.0, 2.0] {
-        let spec = disc(blur);
+        let spec = scene(blur);
         let image = render(&spec).unwrap();
         let init = InitialCurve::Circle {
             cx: 122.0,
@@ -124,7 +117,7 @@ fn the_width_and_blur_of_a_thin_line() {
             kind: Kind::Contour,
             line_width: width,
             blur_sigma: blur,
-            ..disc(0.0)
+            ..scene(0.0)
         };
         let image = render(&spec).unwrap();
         let sampler = Sampler::new(&image, Interpolation::CubicBSpline);

@@ -2,36 +2,8 @@
 //! bad input giving one clear line and a non-zero exit.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn vicurve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vicurve"))
-        .args(args)
-        .output()
-        .expect("run vicurve")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// The error contract: exit code `code`, stderr one line starting with
-/// `vicurve: error:` and containing `needle`.
-fn assert_error(out: &Output, code: i32, needle: &str) {
-    let err = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(code), "stderr: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
-    assert!(lines[0].starts_with("vicurve: error: "), "{err}");
-    assert!(
-        lines[0].to_lowercase().contains(&needle.to_lowercase()),
-        "'{needle}' not in: {err}"
-    );
-}
-
-fn p(dir: &Path, name: &str) -> String {
-    dir.join(name).display().to_string()
-}
+use crate::common::{assert_error, p, text, vicurve};
 
 /// A 200x200 disc of radius 60 and its truth, in `dir`.
 fn disc(dir: &Path) -> (String, String) {

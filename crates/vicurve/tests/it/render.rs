@@ -76,7 +76,9 @@ fn disc_pixel(cx: f64, cy: f64, r: f64, i: usize, j: usize) -> f64 {
         + disc_quadrant(r, x0, y0)
 }
 
-fn spec(shape: Shape, kind: Kind) -> RenderSpec {
+/// `shape` as `kind` in a 128x120 image, white on black, lines 2.5 px
+/// wide (the library's defaults otherwise).
+fn white_on_black(shape: Shape, kind: Kind) -> RenderSpec {
     RenderSpec {
         width: 128,
         height: 120,
@@ -89,16 +91,15 @@ fn spec(shape: Shape, kind: Kind) -> RenderSpec {
     }
 }
 
-fn star() -> Shape {
-    Shape::Star {
-        cx: 63.7,
-        cy: 58.2,
-        r0: 40.0,
-        amplitude: 0.2,
-        lobes: 5,
-        phase: 0.3,
-    }
-}
+/// The five-lobed star these tests render, radius 40 +- 8 px.
+const STAR: Shape = Shape::Star {
+    cx: 63.7,
+    cy: 58.2,
+    r0: 40.0,
+    amplitude: 0.2,
+    lobes: 5,
+    phase: 0.3,
+};
 
 fn sum(img: &Image) -> f64 {
     img.data().iter().sum()
@@ -190,7 +191,7 @@ proptest! {
 #[test]
 fn disc_pixels_match_the_analytic_oracle() {
     let (cx, cy, r) = (61.37, 58.81, 37.3);
-    let s = spec(Shape::Circle { cx, cy, r }, Kind::Silhouette);
+    let s = white_on_black(Shape::Circle { cx, cy, r }, Kind::Silhouette);
     let img = render(&s).unwrap();
     let mut worst = 0.0f64;
     for i in 0..s.height {
@@ -213,8 +214,8 @@ fn silhouette_sums_equal_the_areas() {
         b: 20.0,
         angle: 0.7,
     };
-    for shape in [star(), ellipse] {
-        let img = render(&spec(shape.clone(), Kind::Silhouette)).unwrap();
+    for shape in [STAR, ellipse] {
+        let img = render(&white_on_black(shape.clone(), Kind::Silhouette)).unwrap();
         let area = shape.area().unwrap();
         assert!(
             (sum(&img) - area).abs() / area < 1e-8,
@@ -229,14 +230,14 @@ fn contour_sums_equal_width_times_length() {
     // The band between the offsets ±h has area 2h L exactly (the curvature
     // terms cancel), for any closed curve without overlap.
     for shape in [
-        star(),
+        STAR,
         Shape::Circle {
             cx: 64.1,
             cy: 60.4,
             r: 30.0,
         },
     ] {
-        let s = spec(shape.clone(), Kind::Contour);
+        let s = white_on_black(shape.clone(), Kind::Contour);
         let img = render(&s).unwrap();
         let expect = s.line_width * shape.length();
         assert!(
@@ -258,8 +259,8 @@ fn straight_edge_and_line_give_exact_ramps() {
         x_max: 100.0,
     };
     let y0 = 30.37;
-    let img = render(&spec(line(0.0, y0), Kind::Silhouette)).unwrap();
-    let cont = render(&spec(line(0.0, y0), Kind::Contour)).unwrap();
+    let img = render(&white_on_black(line(0.0, y0), Kind::Silhouette)).unwrap();
+    let cont = render(&white_on_black(line(0.0, y0), Kind::Contour)).unwrap();
     for i in 0..120 {
         let (top, bottom) = (i as f64 - 0.5, i as f64 + 0.5);
         let edge = (y0 - top).clamp(0.0, 1.0);
@@ -279,7 +280,7 @@ fn straight_edge_and_line_give_exact_ramps() {
         x_min: 0.0,
         x_max: 100.0,
     };
-    let img = render(&spec(shape, Kind::Silhouette)).unwrap();
+    let img = render(&white_on_black(shape, Kind::Silhouette)).unwrap();
     let w = TAU / lambda;
     let (xa, xb) = (-0.5, 127.5);
     let expect = (60.2 + 0.5) * 128.0 + a / w * ((w * xa + phase).cos() - (w * xb + phase).cos());
@@ -315,7 +316,7 @@ fn profile_pixels_follow_the_formula() {
             method: Method::Profile { half_width: rf },
             foreground: fg,
             background: bg,
-            ..spec(Shape::Circle { cx, cy, r }, kind)
+            ..white_on_black(Shape::Circle { cx, cy, r }, kind)
         };
         let img = render(&s).unwrap();
         for i in 0..s.height {
@@ -331,10 +332,10 @@ fn profile_pixels_follow_the_formula() {
     }
     // Star: every pixel, including those of skipped far blocks, is exactly
     // the formula of the signed distance.
-    let shape = star();
+    let shape = STAR;
     let s = RenderSpec {
         method: Method::Profile { half_width: 3.0 },
-        ..spec(shape.clone(), Kind::Silhouette)
+        ..white_on_black(shape.clone(), Kind::Silhouette)
     };
     let img = render(&s).unwrap();
     for i in 0..s.height {
@@ -350,7 +351,7 @@ fn profile_pixels_follow_the_formula() {
 #[test]
 fn blur_preserves_mass_and_edge_position() {
     // A disc far from the borders: the total is preserved.
-    let disc = render(&spec(
+    let disc = render(&white_on_black(
         Shape::Circle {
             cx: 60.0,
             cy: 60.0,
@@ -375,7 +376,7 @@ fn blur_preserves_mass_and_edge_position() {
     for y0 in [40.0, 40.5, 40.23] {
         let s = RenderSpec {
             blur_sigma: 2.0,
-            ..spec(
+            ..white_on_black(
                 Shape::Sine {
                     y0,
                     amplitude: 0.0,
@@ -546,8 +547,8 @@ fn invalid_specs_are_rejected_with_the_field_name() {
         (
             RenderSpec {
                 kind: Kind::Contour,
-                line_width: 2.0 * star().min_curvature_radius() + 0.1,
-                shape: star(),
+                line_width: 2.0 * STAR.min_curvature_radius() + 0.1,
+                shape: STAR,
                 ..ok.clone()
             },
             "line_width",

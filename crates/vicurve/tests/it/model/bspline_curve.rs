@@ -12,34 +12,11 @@ use vicurve::model::{measure_model, ModelConfig, ModelProfile, ShapeModel};
 use vicurve::render::blur::gaussian_blur;
 use vicurve::render::coverage::polygon_coverage;
 use vicurve::render::noise::{add_gaussian_noise, quantise};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::render;
 use vicurve::truth::Shape;
-use vicurve::virtual_image::Kind;
 use vicurve::{Error, Image};
 
-fn spec(
-    shape: Shape,
-    size: (usize, usize),
-    blur: f64,
-    noise: f64,
-    seed: u64,
-    bits: Option<u8>,
-) -> RenderSpec {
-    RenderSpec {
-        width: size.0,
-        height: size.1,
-        shape,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: blur,
-        noise,
-        seed,
-        bits,
-        ..RenderSpec::default()
-    }
-}
+use crate::common::spec;
 
 const STAR: Shape = Shape::Star {
     cx: 60.37,

@@ -3,29 +3,15 @@
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig};
-use vicurve::render::{render, Method, RenderSpec};
-use vicurve::truth::{evaluate, Shape};
-use vicurve::virtual_image::Kind;
+use vicurve::render::{render, RenderSpec};
+use vicurve::truth::evaluate;
 
-fn disc(noise: f64, seed: u64) -> RenderSpec {
-    RenderSpec {
-        width: 160,
-        height: 160,
-        shape: Shape::Circle {
-            cx: 80.3,
-            cy: 79.6,
-            r: 55.0,
-        },
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise,
-        seed,
-        bits: Some(8),
-        ..RenderSpec::default()
-    }
+use crate::common::disc;
+
+/// The disc these tests measure: 160x160, radius 55 px, blur 1 px, noise
+/// `noise` from `seed`, 8 bits.
+fn scene(noise: f64, seed: u64) -> RenderSpec {
+    disc(160, (80.3, 79.6, 55.0), 1.0, noise, seed, Some(8))
 }
 
 /// Over 50 noise draws at 1, 2 and 5 % noise, the mean predicted sigma is
@@ -46,9 +32,9 @@ fn predicted_sigma_matches_the_observed_scatter() {
         let sigma = m.samples.iter().map(|s| s.sigma).sum::<f64>() / m.samples.len() as f64;
         (e.rms, sigma)
     };
-    let (rms0, _) = rms(&disc(0.0, 0));
+    let (rms0, _) = rms(&scene(0.0, 0));
     for noise in [0.01, 0.02, 0.05] {
-        let draws: Vec<(f64, f64)> = (1..=50).map(|seed| rms(&disc(noise, seed))).collect();
+        let draws: Vec<(f64, f64)> = (1..=50).map(|seed| rms(&scene(noise, seed))).collect();
         let n = draws.len() as f64;
         let mean_sq = draws.iter().map(|d| d.0 * d.0).sum::<f64>() / n;
         let observed = (mean_sq - rms0 * rms0).max(0.0).sqrt();

@@ -94,16 +94,14 @@ fn paint(s: &Scene) -> Image {
 
 /// A five-lobed star, radius 95 +- 11.4 px (smallest radius of curvature
 /// about 37 px, in its hollows), off the pixel grid.
-fn star() -> Shape {
-    Shape::Star {
-        cx: 150.3,
-        cy: 149.6,
-        r0: 95.0,
-        amplitude: 0.12,
-        lobes: 5,
-        phase: 0.4,
-    }
-}
+const STAR: Shape = Shape::Star {
+    cx: 150.3,
+    cy: 149.6,
+    r0: 95.0,
+    amplitude: 0.12,
+    lobes: 5,
+    phase: 0.4,
+};
 
 fn stats(m: &Measurement, shape: &Shape) -> ErrorStats {
     evaluate(&m.points(), shape).expect("evaluate")
@@ -154,7 +152,7 @@ fn textured_star() {
     let scene = |inside, outside| Scene {
         width: 300,
         height: 300,
-        shape: star(),
+        shape: STAR,
         texture_inside: inside,
         texture_outside: outside,
         texture_length: 3.0,
@@ -162,7 +160,7 @@ fn textured_star() {
         noise: 0.01,
         seed: 11,
     };
-    let shape = star();
+    let shape = STAR;
     let textured = paint(&scene(0.1, 0.05));
     let clean = paint(&scene(0.0, 0.0));
 
@@ -236,7 +234,7 @@ fn through_jpeg(image: &Image, quality: u8) -> Image {
 /// compression.
 #[test]
 fn jpeg_quality_75_star() {
-    let shape = star();
+    let shape = STAR;
     let original = paint(&Scene {
         width: 300,
         height: 300,
@@ -409,7 +407,7 @@ fn textured_star_over_texture_draws() {
         ]),
         ..FitConfig::default()
     };
-    let shape = star();
+    let shape = STAR;
     for (name, config) in [
         ("default", FitConfig::default()),
         ("elements >= 20 px", long),

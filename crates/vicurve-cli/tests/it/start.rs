@@ -2,22 +2,8 @@
 //! `--pick` on a thin line (`--kind contour`).
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn vicurve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vicurve"))
-        .args(args)
-        .output()
-        .expect("run vicurve")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn p(dir: &Path, name: &str) -> String {
-    dir.join(name).display().to_string()
-}
+use crate::common::{p, text, vicurve};
 
 fn json(path: &str) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

@@ -4,18 +4,9 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
-fn vicurve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vicurve"))
-        .args(args)
-        .output()
-        .expect("run vicurve")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use crate::common::{assert_error_exact, split_cells, text, vicurve};
 
 fn s(p: &Path) -> String {
     p.display().to_string()
@@ -42,31 +33,11 @@ fn summary(dir: &Path) -> Vec<std::collections::HashMap<String, String>> {
         .collect();
     lines
         .map(|l| {
-            let cells = split_csv(l);
+            let cells = split_cells(l);
             assert_eq!(cells.len(), head.len(), "{l}");
             head.iter().cloned().zip(cells).collect()
         })
         .collect()
-}
-
-fn split_csv(line: &str) -> Vec<String> {
-    let mut cells = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => cells.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    cells.push(cur);
-    cells
 }
 
 /// The exact bar of each frame from `truth.json`.
@@ -351,16 +322,6 @@ fn track_one_edge_and_rerun() {
     assert!(!text(&out.stderr).contains("already done"));
 }
 
-/// The error contract: exit code, one line, a useful word.
-fn assert_error(out: &Output, code: i32, needle: &str) {
-    let err = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(code), "stderr: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
-    assert!(lines[0].starts_with("vicurve: error: "), "{err}");
-    assert!(lines[0].contains(needle), "'{needle}' not in: {err}");
-}
-
 #[test]
 fn job_files_that_cannot_run() {
     let tmp = tempfile::tempdir().unwrap();
@@ -373,12 +334,12 @@ fn job_files_that_cannot_run() {
         s(&p)
     };
     let p = write("typo.toml", &job.replace("axis = ", "axes = "));
-    assert_error(&vicurve(&["run", &p]), 1, "unknown field `axes`");
+    assert_error_exact(&vicurve(&["run", &p]), 1, "unknown field `axes`");
     let p = write("curve.toml", &job.replace("\"bottom\"]", "\"side\"]"));
-    assert_error(&vicurve(&["run", &p]), 1, "no curve named 'side'");
+    assert_error_exact(&vicurve(&["run", &p]), 1, "no curve named 'side'");
     let p = write("glob.toml", &job.replace("frame_*.png", "shot_*.png"));
-    assert_error(&vicurve(&["run", &p]), 1, "no image matches");
-    assert_error(
+    assert_error_exact(&vicurve(&["run", &p]), 1, "no image matches");
+    assert_error_exact(
         &vicurve(&["run", &s(&dir.join("none.toml"))]),
         1,
         "job file not found",
@@ -390,6 +351,6 @@ fn job_files_that_cannot_run() {
         "b.toml",
         &job.replace("axis = \"x\"", "axis = \"estimate\""),
     );
-    assert_error(&vicurve(&["run", &p]), 1, "another job");
+    assert_error_exact(&vicurve(&["run", &p]), 1, "another job");
     assert!(vicurve(&["run", &p, "--force"]).status.success());
 }

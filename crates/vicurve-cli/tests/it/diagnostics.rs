@@ -1,23 +1,7 @@
 //! `vicurve measure --diagnostics DIR`: the files, their sizes and the
 //! JSON record.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn vicurve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vicurve"))
-        .args(args)
-        .output()
-        .expect("run vicurve")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn p(dir: &Path, name: &str) -> String {
-    dir.join(name).display().to_string()
-}
+use crate::common::{p, text, vicurve};
 
 #[test]
 fn diagnostics_files_are_written() {
