@@ -83,7 +83,7 @@ impl Default for LevelModel {
 }
 
 /// Default element length of varying levels, pixels: light that changes
-/// over a few hundred pixels is followed (`tests/levels.rs`: a ±35 %
+/// over a few hundred pixels is followed (`tests/it/fit/levels.rs`: a ±35 %
 /// gradient across a 220 px disc), while each element holds many band
 /// pixels, so that kept levels add little noise through their coupling with
 /// the displacement (shorter elements add more).
@@ -136,7 +136,7 @@ impl LevelModel {
 /// tilts are confounded with its position (a trial multiplied the scatter
 /// at 1 % noise); the pixel-edge stage instead measures the light's
 /// relative tilt on the plateaus beyond the band and holds it fixed (see
-/// `fit::correlation::tilt`; the effect: `tests/levels.rs`).
+/// `correlation::tilt`; the effect: `tests/it/fit/levels.rs`).
 pub(crate) const FEATURES: usize = 2;
 
 /// The features at a pixel of profile value `gamma`.

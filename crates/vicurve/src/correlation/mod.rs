@@ -867,7 +867,7 @@ impl Correlation {
         // are those out of a band's window (`Band::recentre`): they do not
         // count in the fit, and with them a tracked frame on a kept band
         // (wide margin) found varying levels significant on a disc under
-        // even light where a band of its own did not (tests/track.rs).
+        // even light where a band of its own did not (tests/it/fit/track.rs).
         let stride = band.len().div_ceil(NOISE_PIXELS).max(1);
         // In parallel; `collect` keeps the pixels' order.
         let mut res: Vec<(f64, f64)> = (0..band.len().div_ceil(stride))
