@@ -3,7 +3,7 @@
 //! Every fallible public function returns [`Result<T>`](Result). Errors say
 //! what is wrong in one sentence that a command-line tool can print as it is;
 //! a fit that runs but does not converge is *not* an error: see
-//! [`crate::fit::Outcome`].
+//! [`crate::measurement::Outcome`].
 
 use std::path::PathBuf;
 

@@ -22,14 +22,13 @@ mod config;
 mod correlation;
 pub mod grow;
 pub mod levels;
-mod result;
 mod track;
 
-pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
-pub use levels::LevelModel;
-pub use result::{
+pub use crate::measurement::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
 };
+pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
+pub use levels::LevelModel;
 pub use track::{
     measure_tracked, measure_tracked_cached, measure_tracked_from, TrackCache, TrackSnapshot,
     TrackState,

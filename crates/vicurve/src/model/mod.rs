@@ -66,8 +66,9 @@ mod solve;
 pub use init::initial_shape;
 
 use crate::error::{Error, Result};
-use crate::fit::{FitConfig, Measurement, Outcome, Sample};
+use crate::fit::FitConfig;
 use crate::image::Image;
+use crate::measurement::{Measurement, Outcome, Sample};
 use crate::truth::Shape;
 use crate::virtual_image::{Kind, Profile};
 use geometry::Geometry;

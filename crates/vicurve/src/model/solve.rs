@@ -36,7 +36,7 @@
 use super::geometry::{Geometry, Grad, Local, PixelCtx, MAX_GRAD};
 use super::pixels::{select, BandPixel};
 use super::{CoverageModel, ModelConfig, ModelProfile};
-use crate::fit::{Divergence, Outcome};
+use crate::measurement::{Divergence, Outcome};
 use crate::solver::DenseCholesky;
 use crate::virtual_image::Profile;
 use std::f64::consts::FRAC_1_SQRT_2;

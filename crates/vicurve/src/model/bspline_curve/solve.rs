@@ -22,7 +22,7 @@
 use super::system::{Factored, Normal};
 use crate::band::Band;
 use crate::curve::SplineCurve;
-use crate::fit::{Divergence, Outcome};
+use crate::measurement::{Divergence, Outcome};
 use crate::image::Image;
 use crate::model::ModelProfile;
 use crate::spline::MAX_DEGREE;
