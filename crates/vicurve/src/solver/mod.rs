@@ -12,6 +12,8 @@
 //!   cyclic case (banded `L` plus `p` dense last rows, an "arrow").
 //! - [`DenseCholesky`] is a plain dense factorisation, used as a reference in
 //!   tests and for tiny systems.
+//! - `lm` is the one Levenberg–Marquardt loop of the nonlinear fits (the
+//!   shape models, the best-fit circle and ellipse).
 //! - `chunked` sums the pixels' contributions to a system in parallel, in
 //!   fixed chunks, so that the sum has the same bits on every run.
 
@@ -19,6 +21,7 @@ mod band;
 mod cholesky;
 pub(crate) mod chunked;
 mod dense;
+pub(crate) mod lm;
 
 pub use band::SymBandMatrix;
 pub use cholesky::BandCholesky;
