@@ -15,7 +15,7 @@
 //! Pixels; `x` = column, `y` = row, pixel (row `i`, column `j`) centred at
 //! `(x, y) = (j, i)`. `s` is the measured curve's parameter, its cumulative
 //! chord length over dense samples (equal to the arc length to rounding; the
-//! same `s` as [`crate::fit::Sample::s`]). `r` is the signed distance along
+//! same `s` as [`crate::measurement::Sample::s`]). `r` is the signed distance along
 //! the unit normal `n = (-t_y, t_x)`: outward on closed curves (which run
 //! counterclockwise on screen), on the screen-right of travel on open ones.
 //! The grid point of column `j`, row `i` is `C(s_j) + r_i n(s_j)` with
@@ -25,9 +25,10 @@
 
 use crate::curve::Frame;
 use crate::error::{Error, Result};
-use crate::fit::{clutter_scale, tukey_weight, FitConfig, LevelSample, Measurement};
+use crate::fit::{clutter_scale, tukey_weight, FitConfig};
 use crate::image::Image;
 use crate::interp::Sampler;
+use crate::measurement::{LevelSample, Measurement};
 use crate::virtual_image::Profile;
 use serde::{Deserialize, Serialize};
 

@@ -3,8 +3,9 @@
 //! Every fallible public function returns [`Result<T>`](Result). Errors say
 //! what is wrong in one sentence that a command-line tool can print as it is;
 //! a fit that runs but does not converge is *not* an error: see
-//! [`crate::fit::Outcome`].
+//! [`crate::measurement::Outcome`].
 
+use crate::solver::SolverError;
 use std::path::PathBuf;
 
 /// Everything that can go wrong in vicurve.
@@ -127,7 +128,8 @@ pub enum Error {
         unknowns: usize,
     },
     /// A symmetric matrix that should be positive definite is not (an element
-    /// of the curve sees no image gradient).
+    /// of the curve sees no image gradient); the fit's reading of
+    /// [`SolverError::NotPositiveDefinite`].
     #[error("the normal matrix is singular at unknown {index}; some element of the curve sees no band pixel: use fewer elements")]
     NotPositiveDefinite {
         /// Index of the failing pivot.
@@ -142,6 +144,21 @@ pub enum Error {
         /// Why, and what to try.
         reason: String,
     },
+}
+
+/// The fit's reading of a solver error: a matrix that is not positive
+/// definite means an element of the curve sees no band pixel; the other two
+/// are a caller's mistake, reported as an invalid matrix.
+impl From<SolverError> for Error {
+    fn from(e: SolverError) -> Self {
+        match e {
+            SolverError::NotPositiveDefinite { index } => Error::NotPositiveDefinite { index },
+            SolverError::Empty => {
+                Error::invalid("matrix size", "a banded matrix needs at least one row")
+            }
+            SolverError::DimensionMismatch { .. } => Error::invalid("matrix", e.to_string()),
+        }
+    }
 }
 
 /// Shorthand for results of this crate.

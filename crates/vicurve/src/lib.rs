@@ -20,6 +20,7 @@ pub mod image;
 pub mod interp;
 pub mod io;
 pub mod levelset;
+pub mod measurement;
 pub mod model;
 pub mod nurbs;
 pub mod psf;

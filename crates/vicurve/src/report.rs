@@ -23,7 +23,8 @@
 use crate::curve::{InitialCurve, SplineCurveData};
 use crate::derived::Derived;
 use crate::fit::grow::GrowReport;
-use crate::fit::{FitConfig, LevelSample, Measurement, Outcome, StageReport};
+use crate::fit::FitConfig;
+use crate::measurement::{LevelSample, Measurement, Outcome, StageReport};
 use crate::psf::EdgeSpread;
 use crate::virtual_image::Kind;
 use serde::Serialize;

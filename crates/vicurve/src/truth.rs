@@ -37,6 +37,16 @@ pub use crate::virtual_image::Kind;
 ///
 /// Serialised with a `"shape"` tag, e.g.
 /// `{"shape": "circle", "cx": 100.0, "cy": 80.0, "r": 40.0}`.
+///
+/// Why not one type with [`crate::model::ModelShape`] and
+/// [`crate::curve::InitialCurve`]: a truth shape is exact geometry, drawn
+/// into synthetic images and measured against (exact closest points and
+/// signed distances); it has stars and sines, which no model fits. A model
+/// shape is a fit's parameters (lines and polygons, normalised results);
+/// an initial curve is a user's rough start, turned into a B-spline. The
+/// circle and ellipse have the same fields and JSON in `Shape` and
+/// `ModelShape`, so a model's result reads as a truth file's shape
+/// ([`crate::model::ModelShape::to_truth`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "shape", rename_all = "snake_case")]
 pub enum Shape {

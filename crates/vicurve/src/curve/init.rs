@@ -10,6 +10,13 @@ use std::f64::consts::TAU;
 const INIT_SPACING: f64 = 2.0;
 
 /// The starting curve of a measurement (pixels, image coordinates).
+///
+/// A user's rough start, turned into a B-spline by
+/// [`InitialCurve::to_curve`]; its circle is not the exact
+/// [`crate::truth::Shape::Circle`] nor a model's
+/// [`crate::model::ModelShape::Circle`]: it has its own checks (a radius
+/// of at least 2 px), segments and polylines instead of ellipses, and its
+/// own JSON form (a `"type"` tag, as written in result and job files).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum InitialCurve {

@@ -5,7 +5,7 @@ use super::circle::{fit_circle_with, CircleFit};
 use super::ellipse::{fit_ellipse_with, EllipseFit};
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
-use crate::fit::Measurement;
+use crate::measurement::Measurement;
 use serde::{Deserialize, Serialize};
 
 /// Measures of a closed curve. Pixels.

@@ -1,7 +1,7 @@
 //! Curvature along a measured curve.
 
 use crate::curve::SplineCurve;
-use crate::fit::Measurement;
+use crate::measurement::Measurement;
 use serde::{Deserialize, Serialize};
 
 /// The curvature at one point of a curve.

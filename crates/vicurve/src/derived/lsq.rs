@@ -7,6 +7,7 @@
 //! are treated alike) and solved by a dense Cholesky factorisation.
 
 use crate::error::{Error, Result};
+use crate::solver::lm::{self, End, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
 
 /// Largest number of Levenberg–Marquardt iterations.
@@ -22,9 +23,7 @@ const MAX_DAMPING: f64 = 1e16;
 /// `s^2` the cost per degree of freedom and `A` the normal matrix: in the
 /// Jacobi-scaled unknowns, a step under this fraction of `s`). Steps that
 /// small change nothing the deviations can tell apart, and near rounding
-/// most of them are rejected one after another: on the best-fit ellipse
-/// of a 2000 px star (residuals of 11 px), 10 iterations made 26 trials,
-/// 16 of them rejected at the end.
+/// most of them would be rejected one after another.
 const NEGLIGIBLE_STEP: f64 = 1e-6;
 
 /// Per-point weights from per-point standard deviations: `1 / sigma^2` when
@@ -86,10 +85,132 @@ pub(crate) struct Solution {
     pub cost: f64,
 }
 
-/// Minimise `sum w_i r_i(p)^2` from `start` by Levenberg–Marquardt.
+/// The damping schedule of these fits: a heavier start than the shape
+/// models' (the unknowns are scaled to a unit diagonal, so the damping is
+/// relative to 1), lighter and heavier dampings allowed (`1e-15` to `1e16`
+/// included, hence the float just above `1e16`), and a small step that
+/// would raise the cost ends the fit instead of being taken.
+const DAMPING: LmParams = LmParams {
+    start_damping: 1e-3,
+    grow: 10.0,
+    shrink: 0.1,
+    min_damping: 1e-15,
+    max_damping: f64::from_bits(MAX_DAMPING.to_bits() + 1),
+    max_iterations: MAX_ITERATIONS,
+    take_small_steps: false,
+};
+
+/// The residuals, Jacobian and normal equations at one point.
+struct Eval {
+    /// Residuals (unweighted); NaN cost when outside the model's domain.
+    r: Vec<f64>,
+    /// `sum w r^2`.
+    cost: f64,
+    /// `J^T W J`, `k x k` row-major.
+    a: Vec<f64>,
+    /// `J^T W r`.
+    g: Vec<f64>,
+}
+
+/// A model, its weights and its size, as a Levenberg–Marquardt problem.
+struct Fit<'a, M> {
+    model: &'a M,
+    n: usize,
+    k: usize,
+    w: Option<&'a [f64]>,
+}
+
+/// Why [`Fit`] stops the iteration: the normal matrix has no positive
+/// diagonal entry.
+struct Undetermined;
+
+impl<M: Model> Fit<'_, M> {
+    /// The evaluation at `params`; `None` outside the model's domain.
+    fn evaluate(&self, params: &[f64]) -> Option<Eval> {
+        let mut r = vec![0.0; self.n];
+        let mut jac = vec![0.0; self.n * self.k];
+        if !self.model.eval(params, &mut r, &mut jac) {
+            return None;
+        }
+        let cost = weighted_cost(&r, self.w);
+        let (a, g) = normal_equations(&r, &jac, self.w, self.k);
+        Some(Eval { r, cost, a, g })
+    }
+
+    /// The largest diagonal entry of the normal matrix.
+    fn max_diag(&self, eval: &Eval) -> f64 {
+        let k = self.k;
+        (0..k).map(|i| eval.a[i * k + i]).fold(0.0, f64::max)
+    }
+}
+
+impl<M: Model> Problem for Fit<'_, M> {
+    type Point = Vec<f64>;
+    type Eval = Eval;
+    type Stop = Undetermined;
+
+    fn cost(&self, eval: &Eval) -> f64 {
+        eval.cost
+    }
+
+    fn before_iteration(&self, _p: &Vec<f64>, eval: &Eval) -> Option<Undetermined> {
+        let max_diag = self.max_diag(eval);
+        (max_diag <= 0.0 || !max_diag.is_finite()).then_some(Undetermined)
+    }
+
+    fn trial(&self, p: &Vec<f64>, cur: &Eval, lambda: f64) -> Trial<Vec<f64>, Eval, Undetermined> {
+        let (k, n) = (self.k, self.n);
+        let (a, g) = (&cur.a, &cur.g);
+        // Jacobi scaling: unit diagonal; a column that vanishes (the angle of
+        // a circle-like ellipse) keeps a tiny scale instead of dividing by 0.
+        let max_diag = self.max_diag(cur);
+        let d: Vec<f64> = (0..k)
+            .map(|i| a[i * k + i].max(1e-30 * max_diag).sqrt())
+            .collect();
+        let mut m = vec![0.0; k * k];
+        for i in 0..k {
+            for j in 0..k {
+                m[i * k + j] = a[i * k + j] / (d[i] * d[j]);
+            }
+            m[i * k + i] += lambda;
+        }
+        let mut step: Vec<f64> = (0..k).map(|i| -g[i] / d[i]).collect();
+        match DenseCholesky::factor(&m, k) {
+            Ok(chol) => chol.solve_in_place(&mut step),
+            Err(_) => return Trial::Retry,
+        }
+        let trial: Vec<f64> = p
+            .iter()
+            .zip(&step)
+            .zip(&d)
+            .map(|((v, s), di)| v + s / di)
+            .collect();
+        let negligible = NEGLIGIBLE_STEP * (cur.cost / n.saturating_sub(k).max(1) as f64).sqrt();
+        let small = step.iter().all(|s| s.abs() <= negligible)
+            || p.iter()
+                .zip(&trial)
+                .all(|(a, b)| (a - b).abs() <= STEP_TOLERANCE * (1.0 + a.abs()));
+        // Outside the model's domain: a NaN cost, never accepted.
+        let eval = self.evaluate(&trial).unwrap_or(Eval {
+            r: Vec::new(),
+            cost: f64::NAN,
+            a: Vec::new(),
+            g: Vec::new(),
+        });
+        Trial::Step {
+            point: trial,
+            eval,
+            small,
+        }
+    }
+}
+
+/// Minimise `sum w_i r_i(p)^2` from `start` by Levenberg–Marquardt
+/// ([`crate::solver::lm`] with [`DAMPING`]).
 ///
 /// Errors: [`Error::InvalidCurve`] when the start is outside the model's
-/// domain or gives non-finite residuals.
+/// domain or gives non-finite residuals, or when the points do not
+/// determine the unknowns.
 pub(crate) fn minimise(
     model: &impl Model,
     start: Vec<f64>,
@@ -97,93 +218,30 @@ pub(crate) fn minimise(
     w: Option<&[f64]>,
     what: &str,
 ) -> Result<Solution> {
-    let k = start.len();
-    let mut p = start;
-    let mut r = vec![0.0; n];
-    let mut jac = vec![0.0; n * k];
+    let fit = Fit {
+        model,
+        n,
+        k: start.len(),
+        w,
+    };
     let degenerate = |why: &str| Error::InvalidCurve {
         reason: format!("the {what} fit failed: {why}"),
     };
-    if !model.eval(&p, &mut r, &mut jac) {
+    let Some(eval) = fit.evaluate(&start) else {
         return Err(degenerate("no valid starting point"));
-    }
-    let mut cost = weighted_cost(&r, w);
-    if !cost.is_finite() {
+    };
+    if !eval.cost.is_finite() {
         return Err(degenerate("non-finite residuals"));
     }
-    let mut tr = vec![0.0; n];
-    let mut tjac = vec![0.0; n * k];
-    let mut lambda = 1e-3;
-    'outer: for _ in 0..MAX_ITERATIONS {
-        let (a, g) = normal_equations(&r, &jac, w, k);
-        // Jacobi scaling: unit diagonal; a column that vanishes (the angle of
-        // a circle-like ellipse) keeps a tiny scale instead of dividing by 0.
-        let max_diag = (0..k).map(|i| a[i * k + i]).fold(0.0, f64::max);
-        if max_diag <= 0.0 || !max_diag.is_finite() {
-            return Err(degenerate("the points do not determine the unknowns"));
-        }
-        let d: Vec<f64> = (0..k)
-            .map(|i| a[i * k + i].max(1e-30 * max_diag).sqrt())
-            .collect();
-        loop {
-            let mut m = vec![0.0; k * k];
-            for i in 0..k {
-                for j in 0..k {
-                    m[i * k + j] = a[i * k + j] / (d[i] * d[j]);
-                }
-                m[i * k + i] += lambda;
-            }
-            let mut step: Vec<f64> = (0..k).map(|i| -g[i] / d[i]).collect();
-            match DenseCholesky::factor(&m, k) {
-                Ok(chol) => chol.solve_in_place(&mut step),
-                Err(_) => {
-                    lambda *= 10.0;
-                    if lambda > MAX_DAMPING {
-                        break 'outer;
-                    }
-                    continue;
-                }
-            }
-            let trial: Vec<f64> = p
-                .iter()
-                .zip(&step)
-                .zip(&d)
-                .map(|((v, s), di)| v + s / di)
-                .collect();
-            let negligible = NEGLIGIBLE_STEP * (cost / n.saturating_sub(k).max(1) as f64).sqrt();
-            let small = step.iter().all(|s| s.abs() <= negligible)
-                || p.iter()
-                    .zip(&trial)
-                    .all(|(a, b)| (a - b).abs() <= STEP_TOLERANCE * (1.0 + a.abs()));
-            if model.eval(&trial, &mut tr, &mut tjac) {
-                let tcost = weighted_cost(&tr, w);
-                if tcost.is_finite() && tcost <= cost {
-                    p = trial;
-                    cost = tcost;
-                    std::mem::swap(&mut r, &mut tr);
-                    std::mem::swap(&mut jac, &mut tjac);
-                    lambda = (lambda * 0.1).max(1e-15);
-                    if small {
-                        break 'outer;
-                    }
-                    continue 'outer;
-                }
-            }
-            if small {
-                break 'outer;
-            }
-            lambda *= 10.0;
-            if lambda > MAX_DAMPING {
-                break 'outer;
-            }
-        }
+    let end = lm::minimise(&fit, start, eval, &DAMPING);
+    if let End::Stopped(Undetermined) = end.end {
+        return Err(degenerate("the points do not determine the unknowns"));
     }
-    let (normal, _) = normal_equations(&r, &jac, w, k);
     Ok(Solution {
-        params: p,
-        normal,
-        residuals: r,
-        cost,
+        params: end.point,
+        normal: end.eval.a,
+        residuals: end.eval.r,
+        cost: end.eval.cost,
     })
 }
 

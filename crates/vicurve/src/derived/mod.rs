@@ -47,7 +47,7 @@ pub use curvature::{curvature_along, curvature_at, CurvatureSample, CurvatureSum
 pub use ellipse::{fit_ellipse, fit_ellipse_with, EllipseFit};
 pub use width::{width_profile, width_profile_curves, WidthAxis, WidthProfile, WidthSample};
 
-use crate::fit::Measurement;
+use crate::measurement::Measurement;
 use serde::{Deserialize, Serialize};
 
 /// The derived quantities of one measured curve, as written in result files

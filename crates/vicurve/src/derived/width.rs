@@ -9,7 +9,7 @@
 
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
-use crate::fit::{Measurement, Sample};
+use crate::measurement::{Measurement, Sample};
 use serde::{Deserialize, Serialize};
 
 /// The axis along which a width is profiled: positions are measured along

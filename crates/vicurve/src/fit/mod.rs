@@ -42,7 +42,6 @@ pub mod grow;
 mod output;
 mod reference;
 mod refine;
-mod result;
 mod robust;
 mod run;
 mod schedule;
@@ -50,10 +49,10 @@ mod stage;
 mod track;
 
 pub use crate::correlation::levels::{self, LevelModel};
-pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
-pub use result::{
+pub use crate::measurement::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
 };
+pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
 pub use track::{
     measure_tracked, measure_tracked_cached, measure_tracked_from, TrackCache, TrackSnapshot,
     TrackState,

@@ -66,8 +66,9 @@ mod solve;
 pub use init::initial_shape;
 
 use crate::error::{Error, Result};
-use crate::fit::{FitConfig, Measurement, Outcome, Sample};
+use crate::fit::FitConfig;
 use crate::image::Image;
+use crate::measurement::{Measurement, Outcome, Sample};
 use crate::truth::Shape;
 use crate::virtual_image::{Kind, Profile};
 use geometry::Geometry;
@@ -76,7 +77,14 @@ use serde::{Deserialize, Serialize};
 /// Most sides of a polygon model.
 pub const MAX_POLYGON_SIDES: usize = 64;
 
-/// Which shape is fitted.
+/// Which shape model is fitted, as the user names it (`circle`,
+/// `polygon:4`, `bspline-curve`; [`std::str::FromStr`] and `Display` are
+/// each other's inverse).
+///
+/// A separate type from [`ModelShape`] because it is chosen before any
+/// parameter exists (a polygon's number of sides, not its vertices) and
+/// because the free B-spline model has no `ModelShape`: its result is a
+/// curve ([`bspline_curve`]). [`ModelShape::model`] gives a shape's model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ShapeModel {
     /// A circle: centre and radius.
@@ -153,8 +161,11 @@ impl<'de> Deserialize<'de> for ShapeModel {
 }
 
 /// A shape with its parameters, pixels and radians (module docs for the
-/// conventions). Serialised with a `"shape"` tag; circles and ellipses read
-/// as [`crate::truth::Shape`] ([`ModelShape::to_truth`]).
+/// conventions): a model's start and its fitted result. Serialised with a
+/// `"shape"` tag; circles and ellipses read as [`crate::truth::Shape`]
+/// ([`ModelShape::to_truth`]), which is a separate type because it holds
+/// exact geometry for rendering and error measurement, with shapes (stars,
+/// sines) that no model fits and without lines or polygons.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "shape", rename_all = "snake_case")]
 pub enum ModelShape {

@@ -36,7 +36,8 @@
 use super::geometry::{Geometry, Grad, Local, PixelCtx, MAX_GRAD};
 use super::pixels::{select, BandPixel};
 use super::{CoverageModel, ModelConfig, ModelProfile};
-use crate::fit::{Divergence, Outcome};
+use crate::measurement::{Divergence, Outcome};
+use crate::solver::lm::{self, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
 use crate::virtual_image::Profile;
 use std::f64::consts::FRAC_1_SQRT_2;
@@ -61,9 +62,6 @@ const BLUR_REACH: f64 = 3.5;
 /// Tolerance (px) and iterations of the refits of the blur's search.
 const BLUR_FIT_TOLERANCE: f64 = 1e-5;
 const BLUR_FIT_ITERATIONS: usize = 6;
-/// Damping bounds.
-const MU_START: f64 = 1e-6;
-const MU_MAX: f64 = 1e10;
 
 /// `(gamma, dgamma/dd)` of the profile at signed distance `d` (the
 /// pixel-edge profile with its curvature shift, or the paper's profile
@@ -249,7 +247,7 @@ pub(crate) fn levels(
 }
 
 /// How one run of iterations on a fixed band ended.
-pub(crate) struct LmEnd {
+pub(crate) struct BandRun {
     pub geom: Geometry,
     pub a: f64,
     pub c: f64,
@@ -259,6 +257,89 @@ pub(crate) struct LmEnd {
     pub eval: Eval,
 }
 
+/// The fit on a fixed band as a Levenberg–Marquardt problem: the point is
+/// `z = (theta, a, c)` with the geometry of `theta`.
+struct Fixed<'a> {
+    pixels: &'a [BandPixel],
+    profile: ModelProfile,
+    corners: PixelCtx,
+    /// Shape parameters (`theta`'s length).
+    p: usize,
+    /// Pixels per unit of each shape parameter (a step's size in pixels).
+    scales: Vec<f64>,
+    tolerance: f64,
+}
+
+impl Problem for Fixed<'_> {
+    type Point = (Vec<f64>, Geometry);
+    type Eval = Eval;
+    type Stop = Divergence;
+
+    fn cost(&self, eval: &Eval) -> f64 {
+        eval.cost
+    }
+
+    fn trial(
+        &self,
+        (z, geom): &(Vec<f64>, Geometry),
+        cur: &Eval,
+        mu: f64,
+    ) -> Trial<(Vec<f64>, Geometry), Eval, Divergence> {
+        let p = self.p;
+        let m = p + 2;
+        let max_diag = (0..m).map(|i| cur.h[i * m + i]).fold(0.0, f64::max);
+        let mut damped = cur.h.clone();
+        for i in 0..m {
+            damped[i * m + i] += mu * cur.h[i * m + i].max(1e-9 * max_diag);
+        }
+        let Ok(chol) = DenseCholesky::factor(&damped, m) else {
+            return Trial::Retry;
+        };
+        let mut step: Vec<f64> = cur.g.iter().map(|v| -v).collect();
+        chol.solve_in_place(&mut step);
+        let size = (0..p)
+            .map(|k| (step[k] * self.scales[k]).abs())
+            .fold(0.0, f64::max);
+        if !size.is_finite() {
+            return Trial::Stop(Divergence::NonFinite);
+        }
+        if size > MAX_STEP {
+            step.iter_mut().for_each(|s| *s *= MAX_STEP / size);
+        }
+        let trial: Vec<f64> = z.iter().zip(&step).map(|(a, b)| a + b).collect();
+        let Some(trial_geom) = geom.with_params(&trial[..p]) else {
+            return Trial::Retry;
+        };
+        let ev = evaluate(
+            &trial_geom,
+            self.pixels,
+            self.profile,
+            self.corners,
+            trial[p],
+            trial[p + 1],
+        );
+        Trial::Step {
+            point: (trial, trial_geom),
+            eval: ev,
+            small: size < self.tolerance,
+        }
+    }
+
+    fn after_step(&self, (z, _): &(Vec<f64>, Geometry), cur: &Eval) -> Option<Divergence> {
+        let p = self.p;
+        if cur.used < p + 4 {
+            Some(Divergence::Degenerate)
+        } else if z[p + 1].is_nan() || z[p + 1].abs() <= 1e-9 {
+            Some(Divergence::NoContrast)
+        } else {
+            None
+        }
+    }
+}
+
+/// Levenberg–Marquardt ([`crate::solver::lm`], default damping) from
+/// `geom` and levels `(a, c)` on a fixed band; a step under `tolerance`
+/// pixels is taken whatever the rounding of the sum of squares says.
 #[allow(clippy::too_many_arguments)]
 fn levenberg_marquardt(
     geom: Geometry,
@@ -268,87 +349,52 @@ fn levenberg_marquardt(
     (a, c): (f64, f64),
     tolerance: f64,
     max_iterations: usize,
-) -> LmEnd {
+) -> BandRun {
     let p = geom.params().len();
     let m = p + 2;
-    let scales = geom.scales();
+    let problem = Fixed {
+        pixels,
+        profile,
+        corners,
+        p,
+        scales: geom.scales(),
+        tolerance,
+    };
     let mut z = geom.params();
     z.extend([a, c]);
-    let mut geom = geom;
-    let mut cur = evaluate(&geom, pixels, profile, corners, a, c);
-    let end = |geom: Geometry, z: &[f64], iterations, outcome, eval| LmEnd {
+    let cur = evaluate(&geom, pixels, profile, corners, a, c);
+    if cur.used < m + 2 {
+        return BandRun {
+            geom,
+            a: z[p],
+            c: z[p + 1],
+            iterations: 0,
+            outcome: diverged(Divergence::Degenerate),
+            eval: cur,
+        };
+    }
+    let params = LmParams {
+        max_iterations,
+        ..LmParams::default()
+    };
+    let min = lm::minimise(&problem, (z, geom), cur, &params);
+    let ((z, geom), outcome) = (
+        min.point,
+        match min.end {
+            // No step lowers the sum of squares: a minimum, to rounding.
+            lm::End::Converged | lm::End::Stalled => Outcome::Converged,
+            lm::End::IterationLimit => Outcome::IterationLimit,
+            lm::End::Stopped(divergence) => diverged(divergence),
+        },
+    );
+    BandRun {
         geom,
         a: z[p],
         c: z[p + 1],
-        iterations,
+        iterations: min.iterations,
         outcome,
-        eval,
-    };
-    if cur.used < m + 2 {
-        return end(geom, &z, 0, diverged(Divergence::Degenerate), cur);
+        eval: min.eval,
     }
-    let mut mu = MU_START;
-    for it in 1..=max_iterations {
-        let max_diag = (0..m).map(|i| cur.h[i * m + i]).fold(0.0, f64::max);
-        let mut accepted = None;
-        while mu < MU_MAX {
-            let mut damped = cur.h.clone();
-            for i in 0..m {
-                damped[i * m + i] += mu * cur.h[i * m + i].max(1e-9 * max_diag);
-            }
-            let Ok(chol) = DenseCholesky::factor(&damped, m) else {
-                mu *= 10.0;
-                continue;
-            };
-            let mut step: Vec<f64> = cur.g.iter().map(|v| -v).collect();
-            chol.solve_in_place(&mut step);
-            let size = (0..p)
-                .map(|k| (step[k] * scales[k]).abs())
-                .fold(0.0, f64::max);
-            if !size.is_finite() {
-                return end(geom, &z, it, diverged(Divergence::NonFinite), cur);
-            }
-            if size > MAX_STEP {
-                step.iter_mut().for_each(|s| *s *= MAX_STEP / size);
-            }
-            let trial: Vec<f64> = z.iter().zip(&step).map(|(a, b)| a + b).collect();
-            let Some(trial_geom) = geom.with_params(&trial[..p]) else {
-                mu *= 10.0;
-                continue;
-            };
-            let ev = evaluate(
-                &trial_geom,
-                pixels,
-                profile,
-                corners,
-                trial[p],
-                trial[p + 1],
-            );
-            // A step under the tolerance is taken whatever the rounding of
-            // the sum of squares says.
-            if ev.cost <= cur.cost || size < tolerance {
-                accepted = Some((trial, trial_geom, ev, size));
-                mu = (mu * 0.1).max(1e-12);
-                break;
-            }
-            mu *= 10.0;
-        }
-        let Some((trial, trial_geom, ev, size)) = accepted else {
-            // No step lowers the sum of squares: a minimum, to rounding.
-            return end(geom, &z, it, Outcome::Converged, cur);
-        };
-        (z, geom, cur) = (trial, trial_geom, ev);
-        if cur.used < m + 2 {
-            return end(geom, &z, it, diverged(Divergence::Degenerate), cur);
-        }
-        if z[p + 1].is_nan() || z[p + 1].abs() <= 1e-9 {
-            return end(geom, &z, it, diverged(Divergence::NoContrast), cur);
-        }
-        if size < tolerance {
-            return end(geom, &z, it, Outcome::Converged, cur);
-        }
-    }
-    end(geom, &z, max_iterations, Outcome::IterationLimit, cur)
 }
 
 fn diverged(divergence: Divergence) -> Outcome {
@@ -478,7 +524,7 @@ pub(crate) fn run(
 /// axis-aligned edge in an unblurred image shows a single row of partial
 /// pixels: three gray levels, as many unknowns); refitted, every blur fits
 /// equally well there and the smallest, 0, is taken.
-fn fit_blur(end: &LmEnd, pixels: &[BandPixel], current: f64, ctx: PixelCtx) -> f64 {
+fn fit_blur(end: &BandRun, pixels: &[BandPixel], current: f64, ctx: PixelCtx) -> f64 {
     // Every pixel by the pixel-edge profile, corners left out, for every
     // blur tried: the sums compare the same pixels.
     let ctx = PixelCtx {

@@ -1,6 +1,6 @@
 //! Storage of symmetric (cyclic) banded matrices.
 
-use crate::error::{Error, Result};
+use super::SolverError;
 
 /// How the entries are laid out in memory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,13 +42,10 @@ impl SymBandMatrix {
     /// The zero `n x n` matrix with the given half-bandwidth `p` (any `p` is
     /// accepted; `p >= n - 1` simply means "full").
     ///
-    /// Errors: [`Error::InvalidParameter`] when `n == 0`.
-    pub fn zeros(n: usize, half_bandwidth: usize, cyclic: bool) -> Result<Self> {
+    /// Errors: [`SolverError::Empty`] when `n == 0`.
+    pub fn zeros(n: usize, half_bandwidth: usize, cyclic: bool) -> Result<Self, SolverError> {
         if n == 0 {
-            return Err(Error::invalid(
-                "matrix size",
-                "a banded matrix needs at least one row",
-            ));
+            return Err(SolverError::Empty);
         }
         let q = half_bandwidth.min(n - 1);
         // `q <= n - 1`, so `2 q` cannot overflow for any real matrix size.

@@ -1,8 +1,8 @@
 //! Cholesky factorisation of symmetric (cyclic) banded matrices.
 
 use super::band::{Layout, SymBandMatrix};
+use super::SolverError;
 use super::{pivot_ok, pivot_threshold};
-use crate::error::{Error, Result};
 use rayon::prelude::*;
 
 /// The Cholesky factor `L` (lower triangular, `M = L L^T`) of a
@@ -35,12 +35,12 @@ pub struct BandCholesky {
 impl BandCholesky {
     /// Factors `M = L L^T`.
     ///
-    /// Errors: [`Error::NotPositiveDefinite`] with the index of the first
+    /// Errors: [`SolverError::NotPositiveDefinite`] with the index of the first
     /// pivot that is not finite or not above
     /// [`PIVOT_RTOL`](super::PIVOT_RTOL) times the largest diagonal entry
     /// (or of the first non-finite diagonal entry): the matrix is not
     /// positive definite, or is singular to working precision.
-    pub fn factor(mat: &SymBandMatrix) -> Result<Self> {
+    pub fn factor(mat: &SymBandMatrix) -> Result<Self, SolverError> {
         let n = mat.n();
         let (q, m) = match mat.layout() {
             Layout::Band { q } if mat.is_cyclic() => (q, n - q),
@@ -48,9 +48,9 @@ impl BandCholesky {
             Layout::Dense => (0, 0),
         };
         let threshold = pivot_threshold((0..n).map(|i| mat.get(i, i)))
-            .map_err(|index| Error::NotPositiveDefinite { index })?;
+            .map_err(|index| SolverError::NotPositiveDefinite { index })?;
         let w = q + 1;
-        let not_pd = |index| Error::NotPositiveDefinite { index };
+        let not_pd = |index| SolverError::NotPositiveDefinite { index };
 
         // Banded rows: L[i][j] for j in [i - q, i]; the dot product only
         // runs over the columns both rows i and j share.

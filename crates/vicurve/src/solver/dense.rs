@@ -4,8 +4,8 @@
 //! reference the banded solver is tested against, and is fine for systems of
 //! a few dozen unknowns.
 
+use super::SolverError;
 use super::{pivot_ok, pivot_threshold};
-use crate::error::{Error, Result};
 
 /// The Cholesky factor `L` (lower triangular, `A = L L^T`) of a dense
 /// symmetric matrix.
@@ -20,17 +20,15 @@ impl DenseCholesky {
     /// Factors the symmetric `n x n` matrix `a` (row-major; only its lower
     /// triangle is read).
     ///
-    /// Errors: [`Error::InvalidParameter`] when `n == 0` or
-    /// `a.len() != n * n`; [`Error::NotPositiveDefinite`] with the index of
+    /// Errors: [`SolverError::Empty`] when `n == 0`,
+    /// [`SolverError::DimensionMismatch`] when `a.len() != n * n`,
+    /// [`SolverError::NotPositiveDefinite`] with the index of
     /// the first pivot that is not finite or not above
     /// [`PIVOT_RTOL`](super::PIVOT_RTOL) times the largest diagonal entry
     /// (same rule as [`BandCholesky`](super::BandCholesky)).
-    pub fn factor(a: &[f64], n: usize) -> Result<Self> {
-        if n == 0 || a.len() != n * n {
-            return Err(Error::invalid(
-                "matrix",
-                format!("{} values for a {n}x{n} matrix (n must be > 0)", a.len()),
-            ));
+    pub fn factor(a: &[f64], n: usize) -> Result<Self, SolverError> {
+        if n == 0 {
+            return Err(SolverError::Empty);
         }
         let mut chol = DenseCholesky {
             n,
@@ -45,16 +43,16 @@ impl DenseCholesky {
     ///
     /// Errors: those of [`DenseCholesky::factor`]; after an error the factor
     /// is not usable (refactor again before solving).
-    pub fn refactor(&mut self, a: &[f64]) -> Result<()> {
+    pub fn refactor(&mut self, a: &[f64]) -> Result<(), SolverError> {
         let n = self.n;
         if a.len() != n * n {
-            return Err(Error::invalid(
-                "matrix",
-                format!("{} values for a {n}x{n} matrix", a.len()),
-            ));
+            return Err(SolverError::DimensionMismatch {
+                expected: n * n,
+                found: a.len(),
+            });
         }
         let threshold = pivot_threshold((0..n).map(|i| a[i * n + i]))
-            .map_err(|index| Error::NotPositiveDefinite { index })?;
+            .map_err(|index| SolverError::NotPositiveDefinite { index })?;
         let l = &mut self.l;
         for i in 0..n {
             for j in 0..=i {
@@ -67,7 +65,7 @@ impl DenseCholesky {
                 } else if pivot_ok(s, threshold) {
                     l[i * n + i] = s.sqrt();
                 } else {
-                    return Err(Error::NotPositiveDefinite { index: i });
+                    return Err(SolverError::NotPositiveDefinite { index: i });
                 }
             }
         }

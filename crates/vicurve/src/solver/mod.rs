@@ -12,17 +12,25 @@
 //!   cyclic case (banded `L` plus `p` dense last rows, an "arrow").
 //! - [`DenseCholesky`] is a plain dense factorisation, used as a reference in
 //!   tests and for tiny systems.
+//! - `lm` is the one Levenberg–Marquardt loop of the nonlinear fits (the
+//!   shape models, the best-fit circle and ellipse).
 //! - `chunked` sums the pixels' contributions to a system in parallel, in
 //!   fixed chunks, so that the sum has the same bits on every run.
+//!
+//! Errors are [`SolverError`]s, which speak of matrices only; callers turn
+//! them into the crate's [`Error`](crate::Error).
 
 mod band;
 mod cholesky;
 pub(crate) mod chunked;
 mod dense;
+mod error;
+pub(crate) mod lm;
 
 pub use band::SymBandMatrix;
 pub use cholesky::BandCholesky;
 pub use dense::DenseCholesky;
+pub use error::SolverError;
 
 /// Relative pivot tolerance of the Cholesky factorisations.
 ///

@@ -22,9 +22,10 @@
 use super::system::{Factored, Normal};
 use crate::band::Band;
 use crate::curve::SplineCurve;
-use crate::fit::{Divergence, Outcome};
 use crate::image::Image;
+use crate::measurement::{Divergence, Outcome};
 use crate::model::ModelProfile;
+use crate::solver::lm::{self, LmParams, Trial};
 use crate::spline::MAX_DEGREE;
 use crate::virtual_image::{Kind, Profile};
 
@@ -32,9 +33,6 @@ use crate::virtual_image::{Kind, Profile};
 pub(crate) const MAX_STEP: f64 = 0.5;
 /// Band selections (passes) at most.
 const MAX_PASSES: usize = 6;
-/// Damping bounds.
-const MU_START: f64 = 1e-6;
-const MU_MAX: f64 = 1e10;
 
 /// A band pixel: centre, recorded value.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,7 +175,7 @@ impl Problem<'_> {
 }
 
 /// How one run on a fixed band ended.
-pub(crate) struct LmEnd {
+pub(crate) struct BandRun {
     pub curve: SplineCurve,
     pub a: f64,
     pub c: f64,
@@ -190,7 +188,75 @@ fn diverged(divergence: Divergence) -> Outcome {
     Outcome::Diverged { divergence }
 }
 
-/// Levenberg–Marquardt from `curve` on a fixed band.
+/// The fit on a fixed band as a Levenberg–Marquardt problem: the point is
+/// the curve and the levels `(a, c)`.
+struct Fixed<'a, 'p> {
+    problem: &'a Problem<'p>,
+    pixels: &'a [Pixel],
+    tolerance: f64,
+}
+
+impl lm::Problem for Fixed<'_, '_> {
+    type Point = (SplineCurve, [f64; 2]);
+    type Eval = Eval;
+    type Stop = Divergence;
+
+    fn cost(&self, eval: &Eval) -> f64 {
+        eval.cost()
+    }
+
+    fn trial(
+        &self,
+        (curve, z): &(SplineCurve, [f64; 2]),
+        cur: &Eval,
+        mu: f64,
+    ) -> Trial<(SplineCurve, [f64; 2]), Eval, Divergence> {
+        let floor = 1e-9 * cur.eq.max_diag();
+        let Some(f) = Factored::new(&cur.eq.damped(mu, floor)) else {
+            return Trial::Retry;
+        };
+        let mut step: Vec<f64> = cur.eq.g.iter().map(|v| -v).collect();
+        let dz = f.solve(&mut step, [-cur.eq.g_z[0], -cur.eq.g_z[1]]);
+        let size = step
+            .chunks_exact(2)
+            .map(|d| d[0].hypot(d[1]))
+            .fold(0.0, f64::max);
+        if !size.is_finite() {
+            return Trial::Stop(Divergence::NonFinite);
+        }
+        let scale = if size > MAX_STEP {
+            MAX_STEP / size
+        } else {
+            1.0
+        };
+        let ctrl: Vec<[f64; 2]> = curve
+            .control_points()
+            .iter()
+            .zip(step.chunks_exact(2))
+            .map(|(p, d)| [p[0] + scale * d[0], p[1] + scale * d[1]])
+            .collect();
+        let Ok(trial) = SplineCurve::new(curve.basis().clone(), ctrl) else {
+            return Trial::Stop(Divergence::NonFinite);
+        };
+        let tz = [z[0] + scale * dz[0], z[1] + scale * dz[1]];
+        let ev = self
+            .problem
+            .evaluate(&trial, self.pixels, &cur.feet, (tz[0], tz[1]));
+        Trial::Step {
+            point: (trial, tz),
+            eval: ev,
+            small: scale * size < self.tolerance,
+        }
+    }
+
+    fn after_step(&self, (_, z): &(SplineCurve, [f64; 2]), _: &Eval) -> Option<Divergence> {
+        (z[1].is_nan() || z[1].abs() <= 1e-9).then_some(Divergence::NoContrast)
+    }
+}
+
+/// Levenberg–Marquardt ([`crate::solver::lm`], default damping) from
+/// `curve` on a fixed band; a control-point move under `tolerance` pixels
+/// is taken whatever the rounding of the regularised sum says.
 pub(crate) fn levenberg_marquardt(
     problem: &Problem,
     curve: SplineCurve,
@@ -199,84 +265,41 @@ pub(crate) fn levenberg_marquardt(
     (a, c): (f64, f64),
     tolerance: f64,
     max_iterations: usize,
-) -> LmEnd {
-    let basis = curve.basis().clone();
-    let mut cur = problem.evaluate(&curve, pixels, feet, (a, c));
-    let (mut curve, mut z) = (curve, [a, c]);
-    let mut mu = MU_START;
-    let end = |curve, z: [f64; 2], iterations, outcome, eval| LmEnd {
+) -> BandRun {
+    let cur = problem.evaluate(&curve, pixels, feet, (a, c));
+    let fixed = Fixed {
+        problem,
+        pixels,
+        tolerance,
+    };
+    let params = LmParams {
+        max_iterations,
+        ..LmParams::default()
+    };
+    let min = lm::minimise(&fixed, (curve, [a, c]), cur, &params);
+    let outcome = match min.end {
+        lm::End::Converged => Outcome::Converged,
+        // No step lowers the sum: a minimum, to rounding; unless the sum
+        // itself is not a number (then no step could be judged).
+        lm::End::Stalled if !min.eval.cost().is_finite() => diverged(Divergence::NonFinite),
+        lm::End::Stalled => Outcome::Converged,
+        lm::End::IterationLimit => Outcome::IterationLimit,
+        lm::End::Stopped(divergence) => diverged(divergence),
+    };
+    let (curve, z) = min.point;
+    BandRun {
         curve,
         a: z[0],
         c: z[1],
-        iterations,
+        iterations: min.iterations,
         outcome,
-        eval,
-    };
-    for it in 1..=max_iterations {
-        let floor = 1e-9 * cur.eq.max_diag();
-        let mut accepted = None;
-        while mu < MU_MAX {
-            let Some(f) = Factored::new(&cur.eq.damped(mu, floor)) else {
-                mu *= 10.0;
-                continue;
-            };
-            let mut step: Vec<f64> = cur.eq.g.iter().map(|v| -v).collect();
-            let dz = f.solve(&mut step, [-cur.eq.g_z[0], -cur.eq.g_z[1]]);
-            let size = step
-                .chunks_exact(2)
-                .map(|d| d[0].hypot(d[1]))
-                .fold(0.0, f64::max);
-            if !size.is_finite() {
-                return end(curve, z, it, diverged(Divergence::NonFinite), cur);
-            }
-            let scale = if size > MAX_STEP {
-                MAX_STEP / size
-            } else {
-                1.0
-            };
-            let ctrl: Vec<[f64; 2]> = curve
-                .control_points()
-                .iter()
-                .zip(step.chunks_exact(2))
-                .map(|(p, d)| [p[0] + scale * d[0], p[1] + scale * d[1]])
-                .collect();
-            let Ok(trial) = SplineCurve::new(basis.clone(), ctrl) else {
-                return end(curve, z, it, diverged(Divergence::NonFinite), cur);
-            };
-            let tz = [z[0] + scale * dz[0], z[1] + scale * dz[1]];
-            let ev = problem.evaluate(&trial, pixels, &cur.feet, (tz[0], tz[1]));
-            let moved = scale * size;
-            // A step under the tolerance is taken whatever the rounding of
-            // the sum of squares says.
-            if ev.cost() <= cur.cost() || moved < tolerance {
-                accepted = Some((trial, tz, ev, moved));
-                mu = (mu * 0.1).max(1e-12);
-                break;
-            }
-            mu *= 10.0;
-        }
-        let Some((trial, tz, ev, moved)) = accepted else {
-            // No step lowers the sum: a minimum, to rounding; unless the
-            // sum itself is not a number (then no step could be judged).
-            if !cur.cost().is_finite() {
-                return end(curve, z, it, diverged(Divergence::NonFinite), cur);
-            }
-            return end(curve, z, it, Outcome::Converged, cur);
-        };
-        (curve, z, cur) = (trial, tz, ev);
-        if z[1].is_nan() || z[1].abs() <= 1e-9 {
-            return end(curve, z, it, diverged(Divergence::NoContrast), cur);
-        }
-        if moved < tolerance {
-            return end(curve, z, it, Outcome::Converged, cur);
-        }
+        eval: min.eval,
     }
-    end(curve, z, max_iterations, Outcome::IterationLimit, cur)
 }
 
 /// The result of [`run`].
 pub(crate) struct Solved {
-    pub end: LmEnd,
+    pub end: BandRun,
     pub iterations: usize,
     pub passes: usize,
     pub band_pixels: usize,

@@ -1,4 +1,7 @@
-//! What a measurement returns.
+//! What a measurement returns: the curve, its samples, how each stage ended.
+//!
+//! Written by [`crate::fit`] and [`crate::model`], read by [`crate::derived`],
+//! [`crate::report`] and [`crate::diagnostics`]; it imports none of them.
 
 use crate::curve::{SplineCurve, SplineCurveData};
 use crate::virtual_image::Profile;
