@@ -6,32 +6,32 @@
 //! fit that diverged (its outputs are still written) or, for a sequence
 //! (`track`, `run`), frames that failed (the others are measured and
 //! written; `summary.csv` says which failed and why).
+//!
+//! The crate in layers; a module imports only from the layers below it:
+//!
+//! 1. `main`: the command enum, dispatch and exit codes;
+//! 2. [`commands`]: one file per subcommand, each thin;
+//! 3. [`sequence`] (frames of `track` and `run`: jobs, frames, resuming,
+//!    the summary, progress, width plots) and [`measure_start`]
+//!    (`measure`'s start: found automatically, or grown);
+//! 4. [`output`]: what a measurement writes and prints (result files,
+//!    overlays, shape models, diagnostics, CAD exports);
+//! 5. [`plot`]: figures and colour maps;
+//! 6. [`args`]: every option, declared once, and its values parsed by the
+//!    library's `FromStr` into the library's configuration;
+//! 7. [`failure`]: how a command fails.
 
-mod bench_paper;
-mod cmd_bench;
-mod cmd_demo;
-mod cmd_eval;
-mod cmd_export;
-mod cmd_measure;
-mod cmd_mesh;
-mod cmd_run;
-mod cmd_synth;
-mod cmd_track;
-mod diagnostics;
-mod diagnostics_png;
-mod frame;
-mod job;
-mod model_output;
+mod args;
+mod commands;
+mod failure;
+mod measure_start;
 mod output;
-mod overlay;
 mod plot;
-mod plot_width;
-mod resume;
 mod sequence;
-mod summary;
-mod synth_sequence;
 
 use clap::{Parser, Subcommand};
+use commands::{bench, demo, eval, export, measure, mesh, run, synth, track};
+use failure::{one_line, Failure};
 use std::process::ExitCode;
 
 /// Sub-pixel measurement of contours (thin lines) and silhouettes (edges) in
@@ -46,60 +46,40 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Measure a curve in an image from a starting curve.
-    Measure(cmd_measure::Args),
+    Measure(measure::Args),
     /// Render a test image with exactly known geometry (and its truth file).
-    Synth(cmd_synth::Args),
+    Synth(synth::Args),
     /// Compare measured points with a truth file: bias, scatter, max error.
-    Eval(cmd_eval::Args),
+    Eval(eval::Args),
     /// Synthesise a star, measure it from a circle, print the accuracy and
     /// write the overlay.
-    Demo(cmd_demo::Args),
+    Demo(demo::Args),
     /// Benchmark studies: `bench paper` re-runs the paper's section 7.
-    Bench(cmd_bench::Args),
+    Bench(bench::Args),
     /// Track a curve through a sequence of images, each frame started from
     /// the previous frame's result.
-    Track(cmd_track::Args),
+    Track(track::Args),
     /// Run a job file (TOML): images, named curves, widths, outputs.
-    Run(cmd_run::Args),
+    Run(run::Args),
     /// Export a measured curve from its result file: DXF SPLINE (CAD),
     /// SVG of exact cubic Béziers.
-    Export(cmd_export::Args),
+    Export(export::Args),
     /// The NURBS surface patch between two measured edges: JSON, VTK (.vtu).
-    Mesh(cmd_mesh::Args),
-}
-
-/// How a command failed.
-pub enum Failure {
-    /// Bad input or files: exit 1.
-    Error(String),
-    /// The fit diverged (outputs written): exit 3.
-    Diverged(String),
-}
-
-impl From<vicurve::Error> for Failure {
-    fn from(e: vicurve::Error) -> Self {
-        Failure::Error(e.to_string())
-    }
-}
-
-impl From<String> for Failure {
-    fn from(e: String) -> Self {
-        Failure::Error(e)
-    }
+    Mesh(mesh::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Measure(a) => cmd_measure::run(a),
-        Command::Synth(a) => cmd_synth::run(a),
-        Command::Eval(a) => cmd_eval::run(a),
-        Command::Demo(a) => cmd_demo::run(a),
-        Command::Bench(a) => cmd_bench::run(a),
-        Command::Track(a) => cmd_track::run(a),
-        Command::Run(a) => cmd_run::run(a),
-        Command::Export(a) => cmd_export::run(a),
-        Command::Mesh(a) => cmd_mesh::run(a),
+        Command::Measure(a) => measure::run(a),
+        Command::Synth(a) => synth::run(a),
+        Command::Eval(a) => eval::run(a),
+        Command::Demo(a) => demo::run(a),
+        Command::Bench(a) => bench::run(a),
+        Command::Track(a) => track::run(a),
+        Command::Run(a) => run::run(a),
+        Command::Export(a) => export::run(a),
+        Command::Mesh(a) => mesh::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -112,9 +92,4 @@ fn main() -> ExitCode {
             ExitCode::from(3)
         }
     }
-}
-
-/// Messages are printed on one line whatever their source.
-fn one_line(msg: &str) -> String {
-    msg.split_whitespace().collect::<Vec<_>>().join(" ")
 }

@@ -2,51 +2,15 @@
 //!
 //! Pure Rust (no Python objects), so that it is unit-tested by `cargo
 //! test`. The names accepted are those of the command-line tool, so that a
-//! user can move between the two without a dictionary.
+//! user can move between the two without a dictionary: `kind=`,
+//! `polarity=`, `interpolation=` and `levels=` are parsed by the library's
+//! `FromStr` (as the command line's flags are), `stages=` text by
+//! [`parse_stages`].
 
-use vicurve::fit::{parse_stages, Elements, Polarity, Stage};
-use vicurve::interp::Interpolation;
+use vicurve::fit::{parse_stages, Elements, Stage};
 use vicurve::render::{presets, Method, RenderSpec};
 use vicurve::truth::Shape;
 use vicurve::virtual_image::Kind;
-
-/// `kind=`: `"silhouette"` (an edge) or `"contour"` (a thin line).
-pub fn parse_kind(s: &str) -> Result<Kind, String> {
-    match s.trim().to_ascii_lowercase().as_str() {
-        "silhouette" => Ok(Kind::Silhouette),
-        "contour" => Ok(Kind::Contour),
-        _ => Err(format!(
-            "invalid kind: {s:?} (expected \"silhouette\" or \"contour\")"
-        )),
-    }
-}
-
-/// `polarity=`: `"auto"`, `"positive"`, `"negative"`, or the command
-/// line's words for them (`bright-inside`, `dark-inside`, `bright-left`,
-/// `bright-right`, `bright-line`, `dark-line`).
-pub fn parse_polarity(s: &str) -> Result<Polarity, String> {
-    match s.trim().to_ascii_lowercase().replace('_', "-").as_str() {
-        "auto" => Ok(Polarity::Auto),
-        "positive" | "bright-inside" | "bright-left" | "bright-line" => Ok(Polarity::Positive),
-        "negative" | "dark-inside" | "bright-right" | "dark-line" => Ok(Polarity::Negative),
-        _ => Err(format!(
-            "invalid polarity: {s:?} (expected \"auto\", \"positive\" or \"negative\"; or bright-inside, dark-inside, bright-left, bright-right, bright-line, dark-line)"
-        )),
-    }
-}
-
-/// `interpolation=` / `kind=` of `interpolate`: `"cubic"` (cubic B-spline,
-/// the default), `"bilinear"` or `"keys"`, or the library's names
-/// (`cubic_b_spline`, ...).
-pub fn parse_interpolation(s: &str) -> Result<Interpolation, String> {
-    match s.trim().to_ascii_lowercase().as_str() {
-        "cubic" | "cubic-bspline" => Ok(Interpolation::CubicBSpline),
-        "linear" => Ok(Interpolation::Bilinear),
-        other => other.parse::<Interpolation>().map_err(|_| {
-            format!("invalid interpolation: {s:?} (expected \"cubic\", \"bilinear\" or \"keys\")")
-        }),
-    }
-}
 
 /// The element part of one stage as given in Python.
 #[derive(Clone, Debug, PartialEq)]
@@ -318,23 +282,38 @@ mod tests {
 
     #[test]
     fn names_of_the_command_line_are_accepted() {
-        assert_eq!(parse_kind("Contour"), Ok(Kind::Contour));
-        assert!(parse_kind("edge").is_err());
-        assert_eq!(parse_polarity("dark-inside"), Ok(Polarity::Negative));
-        assert_eq!(parse_polarity("bright_line"), Ok(Polarity::Positive));
-        assert_eq!(parse_polarity("auto"), Ok(Polarity::Auto));
-        assert!(parse_polarity("bright").is_err());
+        // The words Python documents, read by the library's parsers.
+        use vicurve::fit::Polarity;
+        use vicurve::interp::Interpolation;
+        assert_eq!("Contour".parse::<Kind>().ok(), Some(Kind::Contour));
+        assert!("edge".parse::<Kind>().is_err());
+        let polarity = |s: &str| s.parse::<Polarity>().ok();
+        assert_eq!(polarity("dark-inside"), Some(Polarity::Negative));
+        assert_eq!(polarity("bright_line"), Some(Polarity::Positive));
+        assert_eq!(polarity("auto"), Some(Polarity::Auto));
+        assert_eq!(polarity("Positive"), Some(Polarity::Positive));
+        assert!(polarity("bright").is_none());
+        let interpolation = |s: &str| s.parse::<Interpolation>().ok();
+        assert_eq!(interpolation("cubic"), Some(Interpolation::CubicBSpline));
         assert_eq!(
-            parse_interpolation("cubic"),
-            Ok(Interpolation::CubicBSpline)
+            interpolation("cubic_b_spline"),
+            Some(Interpolation::CubicBSpline)
         );
-        assert_eq!(
-            parse_interpolation("cubic_b_spline"),
-            Ok(Interpolation::CubicBSpline)
-        );
-        assert_eq!(parse_interpolation("bilinear"), Ok(Interpolation::Bilinear));
-        assert_eq!(parse_interpolation("keys"), Ok(Interpolation::Keys));
-        assert!(parse_interpolation("nearest").is_err());
+        assert_eq!(interpolation("linear"), Some(Interpolation::Bilinear));
+        assert_eq!(interpolation("bilinear"), Some(Interpolation::Bilinear));
+        assert_eq!(interpolation("keys"), Some(Interpolation::Keys));
+        assert!(interpolation("nearest").is_none());
+        for (text, message) in [
+            ("edge".parse::<Kind>().map(|_| ()), "invalid kind"),
+            ("bright".parse::<Polarity>().map(|_| ()), "invalid polarity"),
+            (
+                "quintic".parse::<Interpolation>().map(|_| ()),
+                "invalid interpolation",
+            ),
+        ] {
+            let e = text.unwrap_err().to_string();
+            assert!(e.starts_with(message), "{e}");
+        }
     }
 
     #[test]

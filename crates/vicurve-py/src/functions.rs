@@ -155,11 +155,11 @@ pub fn measure(
 ) -> PyResult<PyMeasurement> {
     let grow = grow_from_py(grow)?;
     let config = FitConfig {
-        kind: args::parse_kind(kind).map_err(value_error)?,
-        polarity: args::parse_polarity(polarity).map_err(value_error)?,
+        kind: kind.parse().map_err(to_py_err)?,
+        polarity: polarity.parse().map_err(to_py_err)?,
         degree: count("degree", degree)?,
         stages: stages_from_py(stages)?,
-        interpolation: args::parse_interpolation(interpolation).map_err(value_error)?,
+        interpolation: interpolation.parse().map_err(to_py_err)?,
         tolerance,
         max_iterations: count("max_iterations", max_iterations)?,
         blur_correction,
@@ -471,7 +471,7 @@ pub fn interpolate<'py>(
     kind: &str,
     gradient: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let kind = args::parse_interpolation(kind).map_err(value_error)?;
+    let kind: vicurve::interp::Interpolation = kind.parse().map_err(to_py_err)?;
     if xs.shape() != ys.shape() {
         return Err(value_error(format!(
             "xs and ys must have the same shape, got {:?} and {:?}",

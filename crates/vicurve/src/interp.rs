@@ -67,17 +67,26 @@ impl fmt::Display for Interpolation {
 impl FromStr for Interpolation {
     type Err = Error;
 
-    /// Parses [`Interpolation::name`], ignoring case and accepting `-` for
-    /// `_`. Errors: [`Error::InvalidParameter`] naming the accepted values.
+    /// Parses [`Interpolation::name`] or the front ends' short names:
+    /// `cubic` (and `cubic_bspline`) for the cubic B-spline, `linear` for
+    /// bilinear; case is ignored and `-` is read as `_`. This is the one
+    /// parser of the command line's `--interp` and Python's
+    /// `interpolation=`. Errors: [`Error::InvalidParameter`] naming the
+    /// accepted values.
     fn from_str(s: &str) -> Result<Self> {
         let norm = s.trim().to_ascii_lowercase().replace('-', "_");
+        match norm.as_str() {
+            "cubic" | "cubic_bspline" => return Ok(Interpolation::CubicBSpline),
+            "linear" => return Ok(Interpolation::Bilinear),
+            _ => {}
+        }
         Interpolation::ALL
             .into_iter()
             .find(|k| k.name() == norm)
             .ok_or_else(|| {
                 Error::invalid(
                     "interpolation",
-                    format!("unknown kind {s:?} (expected bilinear, cubic_b_spline or keys)"),
+                    format!("'{s}' (expected cubic, bilinear or keys)"),
                 )
             })
     }

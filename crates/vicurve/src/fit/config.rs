@@ -23,6 +23,41 @@ pub enum Polarity {
     Negative,
 }
 
+impl std::fmt::Display for Polarity {
+    /// `auto`, `positive` or `negative`, which [`FromStr`](std::str::FromStr)
+    /// reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Polarity::Auto => "auto",
+            Polarity::Positive => "positive",
+            Polarity::Negative => "negative",
+        })
+    }
+}
+
+impl std::str::FromStr for Polarity {
+    type Err = Error;
+    /// `auto`, `positive`, `negative`, or the words that say it on screen:
+    /// `bright-inside`, `bright-left` (open curves, along their direction)
+    /// and `bright-line` for positive, `dark-inside`, `bright-right` and
+    /// `dark-line` for negative. Case is ignored and `_` is read as `-`.
+    /// The one parser of the command line's `--polarity`, job files'
+    /// `polarity` and Python's `polarity=`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().replace('_', "-").as_str() {
+            "auto" => Ok(Polarity::Auto),
+            "positive" | "bright-inside" | "bright-left" | "bright-line" => Ok(Polarity::Positive),
+            "negative" | "dark-inside" | "bright-right" | "dark-line" => Ok(Polarity::Negative),
+            _ => Err(Error::invalid(
+                "polarity",
+                format!(
+                    "'{s}' (expected auto, bright-inside, dark-inside, bright-left, bright-right, bright-line or dark-line; or positive, negative)"
+                ),
+            )),
+        }
+    }
+}
+
 /// How many elements a stage uses.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -67,6 +102,42 @@ pub enum Coords {
         /// Element side, pixels.
         mesh_size: f64,
     },
+}
+
+impl std::fmt::Display for Coords {
+    /// `exact` or `levelset:MESH` (the mesh size in pixels), which
+    /// [`FromStr`](std::str::FromStr) reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Coords::Exact => f.write_str("exact"),
+            Coords::Levelset { mesh_size } => write!(f, "levelset:{mesh_size}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Coords {
+    type Err = Error;
+    /// `exact`, `levelset` (elements of 10 px, the paper's) or
+    /// `levelset:MESH` (elements of MESH px), case ignored: the command
+    /// line's `--coords`. The mesh size is checked when the configuration
+    /// is validated, not here.
+    fn from_str(s: &str) -> Result<Self> {
+        let bad = || {
+            Error::invalid(
+                "coords",
+                format!("'{s}' (expected exact, levelset or levelset:MESH with MESH in pixels)"),
+            )
+        };
+        let norm = s.trim().to_ascii_lowercase();
+        match norm.split_once(':') {
+            None if norm == "exact" => Ok(Coords::Exact),
+            None if norm == "levelset" => Ok(Coords::Levelset { mesh_size: 10.0 }),
+            Some(("levelset", mesh)) => Ok(Coords::Levelset {
+                mesh_size: mesh.trim().parse().map_err(|_| bad())?,
+            }),
+            _ => Err(bad()),
+        }
+    }
 }
 
 /// One stage of the coarse-to-fine schedule.

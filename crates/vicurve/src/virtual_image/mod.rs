@@ -151,13 +151,16 @@ impl std::fmt::Display for Kind {
 
 impl std::str::FromStr for Kind {
     type Err = crate::Error;
+    /// `silhouette` or `contour` (the [`Display`](std::fmt::Display)
+    /// names), case ignored: the one parser of the command line's `--kind`,
+    /// job files' `kind` and Python's `kind=`.
     fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "silhouette" | "edge" => Ok(Kind::Silhouette),
-            "contour" | "line" => Ok(Kind::Contour),
+        match s.trim().to_ascii_lowercase().as_str() {
+            "silhouette" => Ok(Kind::Silhouette),
+            "contour" => Ok(Kind::Contour),
             _ => Err(crate::Error::invalid(
                 "kind",
-                format!("'{s}' (expected 'silhouette' or 'contour')"),
+                format!("'{s}' (expected silhouette or contour)"),
             )),
         }
     }

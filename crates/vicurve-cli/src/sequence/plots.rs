@@ -8,9 +8,9 @@
 //! The data are read back from the frames' width CSVs and the summary's
 //! rows, so a resumed run plots the whole sequence.
 
-use crate::job::Job;
+use super::job::Job;
+use super::summary::{split_csv, COLUMNS};
 use crate::plot::{write_png_with, write_svg_with, Anchor, Canvas};
-use crate::summary::{split_csv, COLUMNS};
 use std::path::Path;
 
 /// Most profiles drawn in one panel.

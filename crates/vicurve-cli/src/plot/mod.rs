@@ -1,4 +1,6 @@
-//! Log–log line plots for the benchmark reports, as SVG and PNG.
+//! Figures: log–log line plots (the benchmark reports, the diagnostics'
+//! convergence), as SVG and PNG; [`maps`]: colour maps of the diagnostics'
+//! images.
 //!
 //! A [`Figure`] is a row of [`Panel`]s sharing one legend on the right. Both
 //! axes of every panel are logarithmic (the paper's figures are): the range
@@ -10,6 +12,8 @@
 //! One layout serves both outputs through the [`Canvas`] trait; the PNG is
 //! drawn at twice the SVG's size with an 8x8 bitmap font (scaled) so that it
 //! needs no font file.
+
+pub mod maps;
 
 use font8x8::legacy::BASIC_LEGACY;
 use std::fmt::Write as _;

@@ -1,7 +1,8 @@
 //! `vicurve demo`: the whole job on a synthetic star, end to end.
 
-use crate::cmd_measure::{finish, print_summary, write_outputs, Outputs};
-use crate::Failure;
+use crate::args::Outputs;
+use crate::failure::{finish, Failure};
+use crate::output::measurement::{print_summary, write_outputs, Measured};
 use std::path::PathBuf;
 use std::time::Instant;
 use vicurve::curve::InitialCurve;
@@ -61,14 +62,15 @@ pub fn run(args: Args) -> Result<(), Failure> {
         png: Some(dir.join("overlay.png")),
         png_scale: 1,
     };
-    write_outputs(
-        &outputs,
-        &image_path.display().to_string(),
-        &image,
-        &init,
-        &config,
-        &m,
-    )?;
+    let input = image_path.display().to_string();
+    let measured = Measured {
+        input: &input,
+        image: &image,
+        init: &init,
+        config: &config,
+        m: &m,
+    };
+    write_outputs(&outputs, measured, None)?;
     println!(
         "4. wrote star.png, truth.json, result.json, points.csv, overlay.svg and overlay.png in {}",
         dir.display()

@@ -45,17 +45,21 @@
 //! schedule. `track_stages = "default"` forces the whole default schedule
 //! on every frame (the coarse bands, 20, 10 and 5 px, then re-estimate the
 //! blur and elements from scratch); `track_stages = "R:N,..."` gives
-//! explicit stages, which end without the pixel-edge stage: with `2:auto`
-//! alone the width of the synthetic necking specimen is off by 0.06 to
-//! 0.14 px instead of under 0.01 (docs/benchmarks.md, "Sequences").
+//! explicit stages, which end without the pixel-edge stage and are less
+//! accurate (docs/benchmarks.md, "Sequences").
 
-use crate::cmd_measure::{parse_init, parse_interp, parse_polarity};
-use crate::Failure;
+use crate::args::CurveArgs;
+use crate::failure::{one_line, Failure};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{parse_stages, FitConfig};
 use vicurve::virtual_image::Kind;
+
+/// `DIR/summary.csv`.
+pub const SUMMARY_STEM: &str = "summary";
+/// `DIR/job.json`: the job's manifest and fingerprint.
+pub const MANIFEST_STEM: &str = "job";
 
 /// The job file as written (TOML).
 #[derive(Deserialize, Debug)]
@@ -84,24 +88,43 @@ enum Images {
     List(Vec<String>),
 }
 
-/// One curve as written in a job file (also built from `track`'s flags).
-#[derive(Deserialize, Debug, Clone, Default)]
+/// One curve as written in a job file: `name`, `init`, `track_stages`,
+/// and the keys of [`CurveArgs`] (the flags of `measure` and `track`).
+#[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
-pub struct CurveFile {
-    pub name: Option<String>,
-    pub init: String,
-    pub kind: Option<String>,
+struct CurveFile {
+    name: Option<String>,
+    init: String,
+    kind: Option<String>,
     #[serde(default)]
-    pub closed: bool,
-    pub polarity: Option<String>,
-    pub stages: Option<String>,
-    pub track_stages: Option<String>,
-    pub degree: Option<usize>,
-    pub interp: Option<String>,
-    pub tolerance: Option<f64>,
-    pub max_iter: Option<usize>,
+    closed: bool,
+    polarity: Option<String>,
+    stages: Option<String>,
+    track_stages: Option<String>,
+    degree: Option<usize>,
+    interp: Option<String>,
+    tolerance: Option<f64>,
+    max_iter: Option<usize>,
     #[serde(default)]
-    pub no_blur_correction: bool,
+    no_blur_correction: bool,
+}
+
+impl CurveFile {
+    /// The curve's options: the flags' defaults for the keys left out.
+    fn args(&self) -> CurveArgs {
+        let d = CurveArgs::default();
+        CurveArgs {
+            closed: self.closed,
+            kind: self.kind.clone().unwrap_or(d.kind),
+            polarity: self.polarity.clone().unwrap_or(d.polarity),
+            stages: self.stages.clone(),
+            degree: self.degree.unwrap_or(d.degree),
+            interp: self.interp.clone(),
+            tolerance: self.tolerance.unwrap_or(d.tolerance),
+            max_iter: self.max_iter.unwrap_or(d.max_iter),
+            no_blur_correction: self.no_blur_correction,
+        }
+    }
 }
 
 #[derive(Deserialize, Debug)]
@@ -230,7 +253,14 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
         .curve
         .iter()
         .enumerate()
-        .map(|(i, c)| curve_spec(c, i, &base))
+        .map(|(i, c)| {
+            let name = c.name.clone().unwrap_or_else(|| format!("curve{}", i + 1));
+            let init = match c.init.strip_prefix("polyline:") {
+                Some(file) => format!("polyline:{}", resolve(&base, file)),
+                None => c.init.clone(),
+            };
+            curve_spec(name, &init, &c.args(), c.track_stages.as_deref())
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let widths = file
         .width
@@ -296,53 +326,29 @@ pub fn expand_glob(pattern: &str) -> Result<Vec<PathBuf>, Failure> {
     Ok(paths)
 }
 
-/// The two configurations of a curve.
-pub fn curve_spec(c: &CurveFile, index: usize, base: &Path) -> Result<CurveSpec, Failure> {
-    let name = c
-        .name
-        .clone()
-        .unwrap_or_else(|| format!("curve{}", index + 1));
-    let context = |e: Failure| match e {
-        Failure::Error(m) | Failure::Diverged(m) => Failure::Error(format!("curve '{name}': {m}")),
-    };
-    let init_text = match c.init.strip_prefix("polyline:") {
-        Some(file) => format!("polyline:{}", resolve(base, file)),
-        None => c.init.clone(),
-    };
-    let init = parse_init(&init_text, c.closed).map_err(context)?;
-    let kind = match c.kind.as_deref() {
-        None | Some("silhouette") => Kind::Silhouette,
-        Some("contour") => Kind::Contour,
-        Some(k) => {
-            return Err(context(Failure::Error(format!(
-                "unknown kind '{k}' (expected silhouette or contour)"
-            ))));
-        }
-    };
-    let mut first = FitConfig {
-        kind,
-        polarity: parse_polarity(c.polarity.as_deref().unwrap_or("auto")).map_err(context)?,
-        degree: c.degree.unwrap_or(3),
-        tolerance: c.tolerance.unwrap_or(1e-4),
-        max_iterations: c.max_iter.unwrap_or(200),
-        blur_correction: !c.no_blur_correction,
-        ..FitConfig::default()
-    };
-    if let Some(i) = &c.interp {
-        first.interpolation = parse_interp(i).map_err(context)?;
-    }
-    if let Some(s) = &c.stages {
-        first.stages = Some(parse_stages(s).map_err(|e| context(e.into()))?);
-    }
+/// The curve `name` started from `init` (as `--init`, its file already
+/// resolved), with its two configurations: frames started from `init`
+/// get `args`' stages, frames started from the previous result
+/// `track_stages` (`default`: the default schedule; none: the first
+/// frame's, or the tracking schedule when that is the default).
+pub fn curve_spec(
+    name: String,
+    init: &str,
+    args: &CurveArgs,
+    track_stages: Option<&str>,
+) -> Result<CurveSpec, Failure> {
+    let context = |e: Failure| Failure::Error(format!("curve '{name}': {}", e.message()));
+    let init = args.init(init).map_err(context)?;
+    let first = args.config().map_err(context)?;
     let mut tracked = first.clone();
-    tracked.stages = match c.track_stages.as_deref() {
+    tracked.stages = match track_stages {
         Some("default") => None,
         Some(s) => Some(parse_stages(s).map_err(|e| context(e.into()))?),
         None => first.stages.clone(),
     };
-    let tracking_schedule = c.track_stages.is_none()
+    let tracking_schedule = track_stages.is_none()
         && first.stages.is_none()
-        && kind == Kind::Silhouette
+        && first.kind == Kind::Silhouette
         && first.blur_correction;
     first.validate().map_err(|e| context(e.into()))?;
     tracked.validate().map_err(|e| context(e.into()))?;
@@ -457,7 +463,7 @@ pub fn check(job: &Job) -> Result<(), Failure> {
     let mut stems: Vec<String> = Vec::new();
     for p in &job.images {
         let stem = frame_stem(p)?;
-        if stem == crate::sequence::SUMMARY_STEM || stem == crate::sequence::MANIFEST_STEM {
+        if stem == SUMMARY_STEM || stem == MANIFEST_STEM {
             return Err(Failure::Error(format!(
                 "frame {}: the name '{stem}' is reserved for the job's own files; rename the image",
                 p.display()
@@ -480,8 +486,4 @@ pub fn frame_stem(p: &Path) -> Result<String, Failure> {
         .and_then(|s| s.to_str())
         .map(str::to_string)
         .ok_or_else(|| Failure::Error(format!("frame {}: no usable file name", p.display())))
-}
-
-fn one_line(msg: &str) -> String {
-    msg.split_whitespace().collect::<Vec<_>>().join(" ")
 }

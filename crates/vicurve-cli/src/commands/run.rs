@@ -1,7 +1,8 @@
-//! `vicurve run job.toml`: the job file's sequence (see [`crate::job`] for
-//! the format and [`crate::sequence`] for what a run does).
+//! `vicurve run job.toml`: the job file's sequence (see
+//! [`crate::sequence::job`] for the format and [`crate::sequence`] for
+//! what a run does).
 
-use crate::Failure;
+use crate::failure::Failure;
 use std::path::PathBuf;
 
 /// Run a job file: images, curves, widths and outputs in TOML.
@@ -16,6 +17,6 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
-    let job = crate::job::load(&args.job)?;
+    let job = crate::sequence::job::load(&args.job)?;
     crate::sequence::run(&job, args.force)
 }

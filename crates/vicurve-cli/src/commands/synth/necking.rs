@@ -12,9 +12,9 @@
 //! `H / 2`, neck from 6 % to 24 % of the width (growing as the square of
 //! time), neck length `W / 8`, narrowest section at `x = (W - 1) / 2 + 0.4`.
 
-use crate::cmd_synth::{check_bits, parse_size, Args};
-use crate::resume::write_atomic;
-use crate::Failure;
+use crate::args::synth::{check_bits, numbers, parse_size, Args};
+use crate::failure::Failure;
+use crate::output::write_atomic;
 use serde::Serialize;
 use vicurve::render::specimen::{render_specimen, SpecimenSpec};
 use vicurve::truth::specimen::{necking_sequence, NeckedBar};
@@ -45,7 +45,7 @@ pub fn necking(a: &Args) -> Result<(), Failure> {
             a.frames
         )));
     }
-    let levels = crate::cmd_synth::numbers("levels", &a.levels, ',', 2)?;
+    let levels = numbers("levels", &a.levels, ',', 2)?;
     let width = 0.5 * h;
     let bar = NeckedBar {
         axis_y: (h - 1.0) / 2.0 + 0.3,

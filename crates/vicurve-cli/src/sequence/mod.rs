@@ -2,11 +2,11 @@
 //! track`.
 //!
 //! Frames are measured in order, each curve started from its last good
-//! result (see [`crate::frame`]), with a progress bar (frames per second
+//! result (see [`frame`]), with a progress bar (frames per second
 //! and the time left) on a terminal and one log line per frame otherwise.
 //! After every frame the summary is rewritten atomically; a run that is
 //! killed loses at most the frame in progress, and running the same job
-//! again skips the frames done (see [`crate::resume`]) and goes on from the
+//! again skips the frames done (see [`resume`]) and goes on from the
 //! last good curves, with the same results as an uninterrupted run.
 //! `--force` measures every frame again.
 //!
@@ -15,24 +15,32 @@
 //! one line saying how many and the first reason (the others are measured
 //! and written, the summary says which failed and why); nothing measured at
 //! all, or the job cannot run, exit 1.
+//!
+//! - [`job`]: job files, and the job `track`'s flags describe;
+//! - [`frame`]: one frame (decode, measure its curves, derive the widths,
+//!   write its files);
+//! - `resume`: the job's fingerprint and the frames read back;
+//! - `summary`: `summary.csv`, and the exit status read from it;
+//! - `progress`: the progress bar; `plots`: the width plots.
 
-use crate::frame::{decode_frame, measure_frame, FrameFiles, Tracking};
-use crate::job::{frame_stem, Job};
-use crate::resume::{read_recorded, write_atomic, Manifest};
-use crate::summary::{first_cell, header, split_csv, COLUMNS};
-use crate::Failure;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+pub mod frame;
+pub mod job;
+mod plots;
+mod progress;
+mod resume;
+mod summary;
+
+use crate::failure::Failure;
+use crate::output::write_atomic;
+use frame::{decode_frame, measure_frame, FrameFiles, Tracking};
+use job::{frame_stem, Job, MANIFEST_STEM, SUMMARY_STEM};
+use resume::{read_fingerprint, read_recorded, remove_stale_temporaries, Manifest};
 use std::collections::HashMap;
-use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
+use summary::{read_summary, status, write_summary};
 use vicurve::curve::SplineCurve;
 use vicurve::fit::{TrackSnapshot, TrackState};
-
-/// `DIR/summary.csv`.
-pub const SUMMARY_STEM: &str = "summary";
-/// `DIR/job.json`: the job's manifest and fingerprint.
-pub const MANIFEST_STEM: &str = "job";
 
 /// A summary larger than this (bytes) is rewritten at most every
 /// [`SUMMARY_PERIOD`] rather than after every frame.
@@ -96,7 +104,7 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         .collect();
     let to_do = done.iter().filter(|d| !**d).count();
 
-    let bar = progress_bar(to_do as u64)?;
+    let bar = progress::bar(to_do as u64)?;
     let log = |line: &str| {
         if bar.is_hidden() {
             eprintln!("{line}");
@@ -170,52 +178,11 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         );
     }
     if job.outputs.plots {
-        if let Err(e) = crate::plot_width::write_plots(job, &stems, &lines) {
+        if let Err(e) = plots::write_plots(job, &stems, &lines) {
             eprintln!("vicurve: warning: {e}");
         }
     }
     status(&lines, total, &summary_path)
-}
-
-/// Temporary files of [`write_atomic`] that a killed run left behind
-/// (`.NAME.tmp-PID`); files of runs still going (their process alive) are
-/// not told apart, so two runs must not share an output folder.
-fn remove_stale_temporaries(dir: &Path) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let name = e.file_name().to_string_lossy().into_owned();
-        if name.starts_with('.') && name.contains(".tmp-") && e.path().is_file() {
-            let _ = std::fs::remove_file(e.path());
-        }
-    }
-}
-
-/// The fingerprint recorded in a manifest, if it can be read.
-fn read_fingerprint(path: &Path) -> Option<String> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v["fingerprint"].as_str().map(str::to_string)
-}
-
-/// The rows of an existing summary by frame, when its header is today's
-/// (else none: every frame is measured again).
-fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
-    let mut out: HashMap<String, Vec<String>> = HashMap::new();
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return out;
-    };
-    let mut it = text.lines();
-    if it.next() != Some(header().as_str()) {
-        return out;
-    }
-    for line in it.filter(|l| !l.is_empty()) {
-        out.entry(first_cell(line))
-            .or_default()
-            .push(line.to_string());
-    }
-    out
 }
 
 /// A done frame's good curves, their tracking states and the bands they
@@ -246,71 +213,4 @@ fn read_done(job: &Job, fingerprint: &str, path: &Path, files: &FrameFiles) -> O
         done.2.push(band);
     }
     Some(done)
-}
-
-fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {
-    let mut text = header();
-    text.push('\n');
-    for l in lines.iter().flatten() {
-        text.push_str(l);
-        text.push('\n');
-    }
-    Ok(write_atomic(path, text.as_bytes())?)
-}
-
-fn progress_bar(len: u64) -> Result<ProgressBar, Failure> {
-    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    if !std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} frames, {per_sec}, {elapsed} elapsed, ETA {eta}",
-        )
-        .map_err(|e| e.to_string())?,
-    );
-    Ok(bar)
-}
-
-/// Exit status from the summary's `outcome` column.
-fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> Result<(), Failure> {
-    let outcome = COLUMNS.iter().position(|c| *c == "outcome").unwrap_or(2);
-    let reason = COLUMNS.iter().position(|c| *c == "reason").unwrap_or(3);
-    let mut failed_frames = 0;
-    let mut good_rows = 0;
-    let mut first: Option<String> = None;
-    for frame in lines {
-        let mut failed = false;
-        for l in frame {
-            let cells = split_csv(l);
-            let o = cells.get(outcome).map(String::as_str).unwrap_or("");
-            if o == "failed" || o == "diverged" {
-                failed = true;
-                if first.is_none() {
-                    first = Some(format!(
-                        "{} {}: {}",
-                        cells.first().cloned().unwrap_or_default(),
-                        cells.get(1).cloned().unwrap_or_default(),
-                        cells.get(reason).cloned().unwrap_or_default()
-                    ));
-                }
-            } else {
-                good_rows += 1;
-            }
-        }
-        failed_frames += usize::from(failed);
-    }
-    match (failed_frames, good_rows) {
-        (0, _) => Ok(()),
-        (_, 0) => Err(Failure::Error(format!(
-            "no frame could be measured ({}); see {}",
-            first.unwrap_or_default(),
-            summary.display()
-        ))),
-        (n, _) => Err(Failure::Diverged(format!(
-            "{n} of {total} frames failed (first: {}); the others are measured, see {}",
-            first.unwrap_or_default(),
-            summary.display()
-        ))),
-    }
 }

@@ -18,8 +18,8 @@
 //! and the JSON (saying why) only, with a warning, and keeps its exit
 //! status.
 
-use crate::diagnostics_png::{diverging_rgb, gray_rgb, symmetric_scale, write_rgb_png};
-use crate::output::write_json;
+use super::write_json;
+use crate::plot::maps::{diverging_rgb, gray_rgb, symmetric_scale, write_rgb_png};
 use crate::plot::{Figure, Panel, Series};
 use serde::Serialize;
 use std::path::Path;

@@ -13,11 +13,12 @@
 //!   the axis, width and its standard deviation, px);
 //! - `STEM.overlay.png` or `.svg` on request.
 
-use crate::cmd_measure::overlay_layers;
-use crate::job::{AxisChoice, CurveSpec, Job, OverlayKind};
-use crate::output::{write_points_csv, ResultFile};
-use crate::resume::{rebuild, tracking_state, write_atomic};
-use crate::summary::Row;
+use super::job::{AxisChoice, CurveSpec, Job, OverlayKind};
+use super::resume::{rebuild, tracking_state};
+use super::summary::Row;
+use crate::output::measurement::overlay_layers;
+use crate::output::overlay;
+use crate::output::{write_atomic, write_points_csv, ResultFile};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -89,7 +90,7 @@ impl Tracking {
         }
     }
 
-    /// Take the good curves of a frame (as written: see [`crate::resume`])
+    /// Take the good curves of a frame (as written: see [`super::resume`])
     /// with their tracking states and bands, and fix the estimated axes
     /// that are not yet. `measured`: the frame was just measured, and the
     /// caches hold what its good curves left (else it was read back, and
@@ -195,7 +196,7 @@ impl FrameFiles {
 /// What the result file records of the sequence, next to the measurement.
 #[derive(Serialize)]
 struct SequenceInfo<'a> {
-    /// Fingerprint of the job (see [`crate::resume::Manifest`]).
+    /// Fingerprint of the job (see [`super::resume::Manifest`]).
     job: &'a str,
     /// Index of the frame in the sequence (from 0).
     frame: usize,
@@ -569,10 +570,8 @@ fn measure_curve_with<'s>(
 /// control points 2 px apart and carries the previous frame's noise at
 /// that scale; a fit whose displacement has longer elements (as a schedule
 /// without coarse stages has) cannot remove it, so it would pass on to the
-/// next frame and grow: tracking a 2000 px star with the `2:auto` stage
-/// alone, the error grew from 0.04 to 5 px within 18 frames from the
-/// measured curve, and stayed at 0.04 px over 30 frames from the smoothed
-/// one (`examples/track_speed.rs`).
+/// next frame and grow from frame to frame (`examples/track_speed.rs`
+/// tracks a star with the `2:auto` stage alone).
 fn tracked_start(curve: &SplineCurve) -> Result<SplineCurve, String> {
     let length = curve.param_length();
     let spacing = (length / 16.0).clamp(2.0, START_SPACING);
@@ -631,15 +630,13 @@ fn write_overlay(
     let mut layers = Vec::new();
     for r in results {
         if let Ok(m) = &r.measured {
-            let l = overlay_layers(&r.init, &r.config, m).map_err(|e| match e {
-                crate::Failure::Error(s) | crate::Failure::Diverged(s) => s,
-            })?;
+            let l = overlay_layers(&r.init, &r.config, m).map_err(|e| e.message())?;
             layers.extend(l);
         }
     }
     let path = files.overlay(kind);
     match kind {
-        OverlayKind::Png => crate::overlay::write_png(&path, image, &layers, 1),
-        OverlayKind::Svg => crate::overlay::write_svg(&path, image, &layers),
+        OverlayKind::Png => overlay::write_png(&path, image, &layers, 1),
+        OverlayKind::Svg => overlay::write_svg(&path, image, &layers),
     }
 }

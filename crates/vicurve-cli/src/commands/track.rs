@@ -1,9 +1,10 @@
 //! `vicurve track`: one curve through a sequence of images, each frame
 //! started from the previous frame's result (see [`crate::sequence`]).
 
-use crate::job::{self, CurveFile, Job, JobOutputs};
-use crate::Failure;
-use std::path::{Path, PathBuf};
+use crate::args::CurveArgs;
+use crate::failure::Failure;
+use crate::sequence::job::{self, Job, JobOutputs};
+use std::path::PathBuf;
 
 /// Track a curve through a sequence of images.
 #[derive(clap::Args)]
@@ -16,19 +17,8 @@ pub struct Args {
     /// `circle:CX,CY,R`, `segment:X0,Y0,X1,Y1` or `polyline:FILE.csv`.
     #[arg(long)]
     pub init: String,
-    /// Treat a `polyline:` start as closed.
-    #[arg(long)]
-    pub closed: bool,
-    /// `silhouette` or `contour`.
-    #[arg(long, default_value = "silhouette")]
-    pub kind: String,
-    /// Force the polarity (as for `measure`), or `auto`.
-    #[arg(long, default_value = "auto")]
-    pub polarity: String,
-    /// Stages of the first frame (as for `measure`; default: the default
-    /// schedule).
-    #[arg(long)]
-    pub stages: Option<String>,
+    #[command(flatten)]
+    pub curve: CurveArgs,
     /// Stages of the frames started from the previous result: `default`
     /// (the whole default schedule on every frame) or `R:N,...`. Default:
     /// those of the first frame; when that is the default schedule, a
@@ -38,21 +28,6 @@ pub struct Args {
     /// the default schedule but less accurate: see docs/benchmarks.md.
     #[arg(long)]
     pub track_stages: Option<String>,
-    /// Degree of the B-splines (1 to 5).
-    #[arg(long, default_value_t = 3)]
-    pub degree: usize,
-    /// Image interpolation: `cubic`, `bilinear` or `keys`.
-    #[arg(long)]
-    pub interp: Option<String>,
-    /// Convergence tolerance, pixels.
-    #[arg(long, default_value_t = 1e-4)]
-    pub tolerance: f64,
-    /// Iteration limit per stage.
-    #[arg(long, default_value_t = 200)]
-    pub max_iter: usize,
-    /// No blur estimate nor pixel-edge stage (as for `measure`).
-    #[arg(long)]
-    pub no_blur_correction: bool,
     /// Start every frame from `--init` instead of the previous result.
     #[arg(long)]
     pub no_tracking: bool,
@@ -78,7 +53,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
 }
 
 /// The job `track`'s flags describe.
-pub fn build(args: &Args) -> Result<Job, Failure> {
+fn build(args: &Args) -> Result<Job, Failure> {
     let images = if args.images.len() == 1 && has_wildcard(&args.images[0]) {
         job::expand_glob(&args.images[0])?
     } else {
@@ -91,21 +66,8 @@ pub fn build(args: &Args) -> Result<Job, Failure> {
         }
         list
     };
-    let curve = CurveFile {
-        name: Some("curve".into()),
-        init: args.init.clone(),
-        kind: Some(args.kind.clone()),
-        closed: args.closed,
-        polarity: Some(args.polarity.clone()),
-        stages: args.stages.clone(),
-        track_stages: args.track_stages.clone(),
-        degree: Some(args.degree),
-        interp: args.interp.clone(),
-        tolerance: Some(args.tolerance),
-        max_iter: Some(args.max_iter),
-        no_blur_correction: args.no_blur_correction,
-    };
-    let spec = job::curve_spec(&curve, 0, Path::new(""))?;
+    let track_stages = args.track_stages.as_deref();
+    let spec = job::curve_spec("curve".into(), &args.init, &args.curve, track_stages)?;
     let overlay = match args.overlay.as_deref() {
         None | Some("none") => None,
         Some(o) => Some(job::parse_overlay(o)?),

@@ -1,8 +1,8 @@
 //! `vicurve mesh`: the NURBS patch between two measured edges
 //! (`vicurve::nurbs::patch`), as JSON and as VTK files for ParaView.
 
+use crate::failure::Failure;
 use crate::output::write_json;
-use crate::Failure;
 use serde::Serialize;
 use std::path::PathBuf;
 use vicurve::export::read_result_curve;

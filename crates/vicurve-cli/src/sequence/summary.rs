@@ -6,6 +6,10 @@
 //! the `min_width` columns. Cells that do not apply are empty. Lengths are
 //! pixels, angles degrees (counterclockwise on screen from `+x`).
 
+use crate::failure::Failure;
+use crate::output::write_atomic;
+use std::collections::HashMap;
+use std::path::Path;
 use vicurve::derived::{ClosedMeasures, WidthSample};
 use vicurve::fit::{Measurement, Outcome};
 
@@ -229,7 +233,7 @@ pub fn first_cell(line: &str) -> String {
     }
 }
 
-/// The cells of a CSV line written by [`crate::summary`].
+/// The cells of a CSV line written here.
 pub fn split_csv(line: &str) -> Vec<String> {
     let mut cells = Vec::new();
     let mut cur = String::new();
@@ -248,6 +252,80 @@ pub fn split_csv(line: &str) -> Vec<String> {
     }
     cells.push(cur);
     cells
+}
+
+/// The rows of an existing summary by frame, when its header is today's
+/// (else none: every frame is measured again).
+pub fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
+    let mut out: HashMap<String, Vec<String>> = HashMap::new();
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return out;
+    };
+    let mut it = text.lines();
+    if it.next() != Some(header().as_str()) {
+        return out;
+    }
+    for line in it.filter(|l| !l.is_empty()) {
+        out.entry(first_cell(line))
+            .or_default()
+            .push(line.to_string());
+    }
+    out
+}
+
+/// Write the summary (atomically): the header, then every frame's rows.
+pub fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {
+    let mut text = header();
+    text.push('\n');
+    for l in lines.iter().flatten() {
+        text.push_str(l);
+        text.push('\n');
+    }
+    Ok(write_atomic(path, text.as_bytes())?)
+}
+
+/// The sequence's exit status, from the `outcome` column of its rows:
+/// frames that failed are exit 3 (or 1 when none could be measured).
+pub fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> Result<(), Failure> {
+    let outcome = COLUMNS.iter().position(|c| *c == "outcome").unwrap_or(2);
+    let reason = COLUMNS.iter().position(|c| *c == "reason").unwrap_or(3);
+    let mut failed_frames = 0;
+    let mut good_rows = 0;
+    let mut first: Option<String> = None;
+    for frame in lines {
+        let mut failed = false;
+        for l in frame {
+            let cells = split_csv(l);
+            let o = cells.get(outcome).map(String::as_str).unwrap_or("");
+            if o == "failed" || o == "diverged" {
+                failed = true;
+                if first.is_none() {
+                    first = Some(format!(
+                        "{} {}: {}",
+                        cells.first().cloned().unwrap_or_default(),
+                        cells.get(1).cloned().unwrap_or_default(),
+                        cells.get(reason).cloned().unwrap_or_default()
+                    ));
+                }
+            } else {
+                good_rows += 1;
+            }
+        }
+        failed_frames += usize::from(failed);
+    }
+    match (failed_frames, good_rows) {
+        (0, _) => Ok(()),
+        (_, 0) => Err(Failure::Error(format!(
+            "no frame could be measured ({}); see {}",
+            first.unwrap_or_default(),
+            summary.display()
+        ))),
+        (n, _) => Err(Failure::Diverged(format!(
+            "{n} of {total} frames failed (first: {}); the others are measured, see {}",
+            first.unwrap_or_default(),
+            summary.display()
+        ))),
+    }
 }
 
 #[cfg(test)]

@@ -3,15 +3,15 @@
 //! as the `model` object of the result file, and sampled for `--points`
 //! and the overlays.
 
-use crate::cmd_measure::{finish, print_summary, write_outputs, Outputs};
-use crate::output::{write_json, ResultFile};
-use crate::Failure;
+use super::cad;
+use super::measurement::{print_summary, write_outputs, Measured};
+use super::{write_json, ResultFile};
+use crate::args::{CurveFiles, Outputs};
+use crate::failure::{finish, Failure};
 use serde::Serialize;
-use vicurve::curve::InitialCurve;
-use vicurve::fit::{FitConfig, Measurement, Outcome};
+use vicurve::fit::Outcome;
 use vicurve::model::bspline_curve::{measure_bspline_curve, BsplineCurveConfig};
 use vicurve::model::{measure_model, ModelConfig, ModelFit, ModelProfile, ShapeModel};
-use vicurve::Image;
 
 /// A model whose residual RMS exceeds the B-spline curve's by this factor
 /// is reported as a likely misfit.
@@ -27,49 +27,37 @@ struct WithModel<'a, M> {
     model: &'a M,
 }
 
-/// Write the outputs of a measurement `m` shown through a model's samples
+/// Write the outputs of a measurement shown through a model's samples
 /// (`--points`, the overlays; `--out` with the `model` object), and print
 /// the measurement's summary when nothing is written. Returns the overlay
 /// and points writing's result, then the record's, for the caller to
 /// report after its own printing.
-#[allow(clippy::too_many_arguments)]
 fn write_with_model<M: Serialize>(
     outputs: &Outputs,
-    path_text: &str,
-    image: &Image,
-    init: &InitialCurve,
-    config: &FitConfig,
-    m: &Measurement,
+    w: Measured,
     samples: Vec<vicurve::fit::Sample>,
     model: &M,
 ) -> (Result<(), Failure>, Result<(), Failure>) {
-    let mut shown = m.clone();
+    let mut shown = w.m.clone();
     shown.samples = samples;
     let others = Outputs {
         out: None,
-        points: outputs.points.clone(),
-        svg: outputs.svg.clone(),
-        png: outputs.png.clone(),
-        png_scale: outputs.png_scale,
+        ..outputs.clone()
     };
-    let written = write_outputs(&others, path_text, image, init, config, &shown);
+    let written = write_outputs(&others, Measured { m: &shown, ..w }, None);
     let json = match &outputs.out {
         Some(p) => {
-            let size = (image.width(), image.height());
+            let size = (w.image.width(), w.image.height());
             let record = WithModel {
-                result: ResultFile::new(path_text, size, init, config, &shown),
+                result: ResultFile::new(w.input, size, w.init, w.config, &shown),
                 model,
             };
             write_json(p, &record).map_err(Failure::Error)
         }
         None => Ok(()),
     };
-    let any = outputs.out.is_some()
-        || outputs.points.is_some()
-        || outputs.svg.is_some()
-        || outputs.png.is_some();
-    if !any {
-        print_summary(config, m);
+    if !outputs.any() {
+        print_summary(w.config, w.m);
     }
     (written, json)
 }
@@ -95,19 +83,11 @@ fn model_outcome(what: &str, outcome: Outcome) -> Result<(), Failure> {
 /// overlays: the fitted shape's samples; `--out`: the record with `model`)
 /// and print the parameters. Exit status: an error when the model cannot be
 /// fitted (1), a diverged B-spline or model fit (3).
-pub fn run(
-    model: ShapeModel,
-    outputs: &Outputs,
-    path_text: &str,
-    image: &Image,
-    init: &InitialCurve,
-    config: &FitConfig,
-    m: &Measurement,
-) -> Result<(), Failure> {
-    let fit = measure_model(image, m, config, model, &ModelConfig::default())?;
+pub fn run(model: ShapeModel, outputs: &Outputs, w: Measured) -> Result<(), Failure> {
+    let (m, config) = (w.m, w.config);
+    let fit = measure_model(w.image, m, config, model, &ModelConfig::default())?;
     let samples = fit.samples(config.sample_spacing)?;
-    let (written, json) =
-        write_with_model(outputs, path_text, image, init, config, m, samples, &fit);
+    let (written, json) = write_with_model(outputs, w, samples, &fit);
     print_model(&fit);
     // A shape that does not describe the edge leaves much more residual
     // than the free B-spline curve.
@@ -130,22 +110,17 @@ pub fn run(
 /// measurement `m`; `--points` and the overlays show its samples, `--out`
 /// adds it as `model`, `--dxf` / `--svg-curve` export it. Exit status as
 /// [`run`].
-#[allow(clippy::too_many_arguments)]
 pub fn run_bspline_curve(
     outputs: &Outputs,
-    cad: &crate::cmd_export::CurveFiles,
-    path_text: &str,
-    image: &Image,
-    init: &InitialCurve,
-    config: &FitConfig,
-    m: &Measurement,
+    files: &CurveFiles,
+    w: Measured,
 ) -> Result<(), Failure> {
-    let fit = measure_bspline_curve(image, m, config, &BsplineCurveConfig::default())?;
-    let size = (image.width(), image.height());
-    let cad_written = cad.write(&fit.curve, path_text, Some(size));
+    let (m, config) = (w.m, w.config);
+    let fit = measure_bspline_curve(w.image, m, config, &BsplineCurveConfig::default())?;
+    let size = (w.image.width(), w.image.height());
+    let cad_written = cad::write(files, &fit.curve, w.input, Some(size));
     let samples = fit.samples(config.sample_spacing)?;
-    let (written, json) =
-        write_with_model(outputs, path_text, image, init, config, m, samples, &fit);
+    let (written, json) = write_with_model(outputs, w, samples, &fit);
     let sigmas: Vec<f64> = fit.control_points.iter().map(|p| p.sigma_n).collect();
     let max_sigma = sigmas.iter().copied().fold(0.0, f64::max);
     let rms_sigma = (sigmas.iter().map(|s| s * s).sum::<f64>() / sigmas.len().max(1) as f64).sqrt();

@@ -1,7 +1,7 @@
 //! `vicurve eval`: accuracy of measured points against a truth file.
 
+use crate::failure::Failure;
 use crate::output::write_json;
-use crate::Failure;
 use serde::Serialize;
 use std::path::PathBuf;
 use vicurve::truth::{evaluate, ErrorStats, Truth};

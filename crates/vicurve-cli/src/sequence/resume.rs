@@ -16,31 +16,13 @@
 //! floats in their shortest round-tripping form, so both are the same
 //! numbers to the last bit.
 
-use crate::job::CurveSpec;
-use crate::job::WidthSpec;
+use super::job::{CurveSpec, WidthSpec};
 use serde::Serialize;
 use std::path::Path;
 use vicurve::curve::{SplineCurve, SplineCurveData};
 use vicurve::fit::{Measurement, Outcome, TrackSnapshot, TrackState};
 use vicurve::spline::Basis;
 use vicurve::virtual_image::Profile;
-
-/// Write `bytes` to `path` through a temporary file in the same folder and
-/// a rename: readers (and a later run) see the old file or the new one,
-/// never a part.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
-    std::fs::write(&tmp, bytes).map_err(fail)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e)
-    })
-}
 
 /// What defines the results of a job, and so its fingerprint: the
 /// curves (start and configurations), tracking and widths; not the list of
@@ -177,6 +159,30 @@ pub fn tracking_state(m: &Measurement, written: &SplineCurve) -> Option<TrackSta
     )
 }
 
+/// Remove the temporary files of [`write_atomic`] that a killed run left
+/// behind (`.NAME.tmp-PID`); files of runs still going (their process
+/// alive) are not told apart, so two runs must not share an output folder.
+///
+/// [`write_atomic`]: crate::output::write_atomic
+pub fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') && name.contains(".tmp-") && e.path().is_file() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// The fingerprint recorded in a manifest, if it can be read.
+pub fn read_fingerprint(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v["fingerprint"].as_str().map(str::to_string)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,16 +210,5 @@ mod tests {
             assert_eq!(r.to_data(), c.to_data());
             assert_eq!(r, c);
         }
-    }
-
-    #[test]
-    fn atomic_write_replaces_whole_files() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("a.txt");
-        write_atomic(&p, b"first").unwrap();
-        write_atomic(&p, b"second").unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"second");
-        // No temporary file is left behind.
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

@@ -3,13 +3,15 @@
 //! study with blur and noise; numbers as CSV, figures as SVG and PNG, and a
 //! report that sets them against the paper's stated figures.
 
-use crate::bench_paper::{
+mod paper;
+
+use crate::failure::Failure;
+use crate::plot::{write_png, write_svg, Figure, Panel, Series};
+use indicatif::{ProgressBar, ProgressStyle};
+use paper::{
     coverage_grid, coverage_seeds, element_sizes, paper_cases, ratios, run_coverage, run_paper,
     CoverageRow, PaperRow, Study, LEVELSET,
 };
-use crate::plot::{write_png, write_svg, Figure, Panel, Series};
-use crate::Failure;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use vicurve::fit::Coords;

@@ -1,0 +1,12 @@
+//! One module per subcommand: its own arguments (made of the structs of
+//! [`crate::args`]) and `run`, which calls the layers below.
+
+pub mod bench;
+pub mod demo;
+pub mod eval;
+pub mod export;
+pub mod measure;
+pub mod mesh;
+pub mod run;
+pub mod synth;
+pub mod track;

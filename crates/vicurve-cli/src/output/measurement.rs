@@ -1,0 +1,193 @@
+//! Every output of one measurement (`--out`, `--points`, `--svg`,
+//! `--png`) and the summary printed when none is asked for.
+
+use super::overlay::{write_png, write_svg, Layer, Style};
+use super::{polarity_text, write_json, write_points_csv, ResultFile};
+use crate::args::Outputs;
+use crate::failure::Failure;
+use vicurve::curve::InitialCurve;
+use vicurve::fit::grow::GrowReport;
+use vicurve::fit::{FitConfig, Measurement};
+use vicurve::virtual_image::Profile;
+use vicurve::Image;
+
+/// A measurement and what its outputs are made from.
+#[derive(Clone, Copy)]
+pub struct Measured<'a> {
+    /// The input's name as given (recorded in the result file).
+    pub input: &'a str,
+    /// The image measured.
+    pub image: &'a Image,
+    /// The start.
+    pub init: &'a InitialCurve,
+    /// The configuration it was measured with.
+    pub config: &'a FitConfig,
+    /// The measurement.
+    pub m: &'a Measurement,
+}
+
+/// Write every requested output, with the record of a grown start
+/// (`--grow`) if any; they are independent, so one failing does not
+/// prevent the others (the first error is reported).
+pub fn write_outputs(
+    args: &Outputs,
+    w: Measured,
+    grown: Option<&GrowReport>,
+) -> Result<(), Failure> {
+    let Measured {
+        input: path_text,
+        image,
+        init,
+        config,
+        m,
+    } = w;
+    let mut first_error: Option<String> = None;
+    let mut note = |r: Result<(), String>| {
+        if let Err(e) = r {
+            first_error.get_or_insert(e);
+        }
+    };
+    if let Some(p) = &args.out {
+        let mut record =
+            ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
+        record.grow = grown;
+        note(write_json(p, &record));
+    }
+    if let Some(p) = &args.points {
+        note(write_points_csv(p, m));
+    }
+    if args.svg.is_some() || args.png.is_some() {
+        let layers = overlay_layers(init, config, m)?;
+        if let Some(p) = &args.svg {
+            note(write_svg(p, image, &layers));
+        }
+        if let Some(p) = &args.png {
+            note(write_png(p, image, &layers, args.png_scale));
+        }
+    }
+    match first_error {
+        Some(e) => Err(Failure::Error(e)),
+        None => Ok(()),
+    }
+}
+
+/// The initial curve (dashed blue), the final band's borders (thin yellow)
+/// and the measured curve (red).
+pub fn overlay_layers(
+    init: &InitialCurve,
+    config: &FitConfig,
+    m: &Measurement,
+) -> Result<Vec<Layer>, Failure> {
+    let closed = m.curve.is_closed();
+    let init_pts = init.dense_points(1.0)?;
+    let r = m.stages.last().map_or(0.0, |s| s.half_width);
+    let offset = |k: f64| -> Vec<[f64; 2]> {
+        m.samples
+            .iter()
+            .map(|s| [s.x + k * r * s.nx, s.y + k * r * s.ny])
+            .collect()
+    };
+    let style = |color: [u8; 4], width: f32, dash: Option<[f32; 2]>| Style { color, width, dash };
+    let mut layers = vec![Layer {
+        label: "initial curve".into(),
+        points: init_pts,
+        closed: init.is_closed(),
+        style: style([40, 120, 255, 255], 1.0, Some([4.0, 3.0])),
+    }];
+    if r > 0.0 {
+        for (k, label) in [
+            (-1.0, "band border (inner side)"),
+            (1.0, "band border (outer side)"),
+        ] {
+            layers.push(Layer {
+                label: format!("{label}, R = {r} px"),
+                points: offset(k),
+                closed,
+                style: style([255, 210, 0, 200], 0.5, None),
+            });
+        }
+    }
+    layers.push(Layer {
+        label: format!("measured {} ({})", config.kind, m.outcome),
+        points: m.points(),
+        closed,
+        style: style([255, 40, 40, 255], 1.0, None),
+    });
+    Ok(layers)
+}
+
+pub fn print_summary(config: &FitConfig, m: &Measurement) {
+    let c = m.stages.last().map_or(f64::NAN, |s| s.c);
+    println!("outcome:     {}", m.outcome);
+    println!(
+        "iterations:  {} over {} stage(s)",
+        m.iterations(),
+        m.stages.len()
+    );
+    println!("residual:    {:.3e} (RMS gray level)", m.residual_rms());
+    println!(
+        "polarity:    {}",
+        polarity_text(config.kind, m.curve.is_closed(), c)
+    );
+    println!("length:      {:.4} px", m.length());
+    if let Some(a) = m.area() {
+        println!("area:        {:.4} px^2", a);
+    }
+    print_closed_measures(m);
+    let last_profile = m.stages.last().map(|s| s.profile);
+    if let Some(Profile::PixelEdge { blur }) = last_profile {
+        println!(
+            "edge blur:   {blur:.3} px optical (fitted; the last stage's virtual edge is a pixel through it, so the true boundary is measured)"
+        );
+    } else if let Some(e) = m.edge_spread {
+        println!(
+            "edge blur:   {:.3} px ({}; fit quality {:.3})",
+            e.sigma,
+            if m.blur_corrected {
+                "its curvature shift removed"
+            } else {
+                "not corrected: the edge is not a clean blurred step"
+            },
+            e.fit_quality
+        );
+    }
+    let sig: Vec<f64> = m
+        .samples
+        .iter()
+        .map(|s| s.sigma)
+        .filter(|v| v.is_finite())
+        .collect();
+    if !sig.is_empty() {
+        let mean = sig.iter().sum::<f64>() / sig.len() as f64;
+        println!(
+            "sigma:       {:.2e} px (mean noise uncertainty of the position)",
+            mean
+        );
+    }
+}
+
+/// The best-fit circle and ellipse of a closed curve (or why there are
+/// none), for the summary.
+fn print_closed_measures(m: &Measurement) {
+    if !m.curve.is_closed() {
+        return;
+    }
+    match vicurve::derived::closed_measures(m) {
+        Ok(d) => {
+            let (c, e) = (d.circle, d.ellipse);
+            println!(
+                "centroid:    ({:.4}, {:.4}) px; equivalent diameter {:.4} px",
+                d.centroid[0], d.centroid[1], d.equivalent_diameter
+            );
+            println!(
+                "circle:      centre ({:.4} +- {:.1e}, {:.4} +- {:.1e}), radius {:.4} +- {:.1e} px (rms distance {:.2e})",
+                c.cx, c.sigma_cx, c.cy, c.sigma_cy, c.r, c.sigma_r, c.rms
+            );
+            println!(
+                "ellipse:     centre ({:.4}, {:.4}), semi-axes {:.4} +- {:.1e} and {:.4} +- {:.1e} px, angle {:.3} deg +- {:.1e} (counterclockwise on screen from +x; rms distance {:.2e})",
+                e.cx, e.cy, e.a, e.sigma_a, e.b, e.sigma_b, e.angle.to_degrees(), e.sigma_angle.to_degrees(), e.rms
+            );
+        }
+        Err(err) => println!("circle:      none ({err})"),
+    }
+}
