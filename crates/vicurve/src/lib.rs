@@ -18,7 +18,6 @@ pub mod fit;
 pub mod image;
 pub mod interp;
 pub mod io;
-pub mod levelset;
 pub mod model;
 pub mod nurbs;
 pub mod psf;
@@ -30,5 +29,7 @@ pub mod start;
 pub mod truth;
 pub mod virtual_image;
 
+/// The paper's levelset coordinates, at their old path (now under [`band`]).
+pub use band::levelset;
 pub use error::{Error, Result};
 pub use image::Image;

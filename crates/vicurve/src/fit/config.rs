@@ -1,6 +1,7 @@
 //! Fit configuration, with documented defaults; serialisable so that every
 //! result file records the configuration it was measured with.
 
+pub use crate::band::Coords;
 use crate::error::{Error, Result};
 use crate::fit::levels::LevelModel;
 use crate::interp::Interpolation;
@@ -41,31 +42,6 @@ pub enum Elements {
         longest: f64,
         /// Shortest element length allowed, pixels.
         shortest: f64,
-    },
-}
-
-/// How the band's pixels get their curvilinear coordinates `(s, r)`
-/// (method, section 7).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Coords {
-    /// Exact closest-point projection of every band pixel onto the
-    /// reference curve (the default: exact, and cheap today).
-    #[default]
-    Exact,
-    /// The paper's finite-element levelsets ([`crate::levelset`]): nodal
-    /// `r` and `s` on a mesh of square bilinear elements of side
-    /// `mesh_size` pixels (at least 1; the paper's is about 10) over the
-    /// band, interpolated at the pixels. A pixel's normal and curvature are
-    /// the curve's at the interpolated `s`. Bilinear interpolation of the
-    /// convex distance overestimates it, by `mesh_size^2 |kappa| / 12` px on
-    /// average, and the measured curve moves out by as much: +4.1e-2 px on
-    /// the paper's disc (radius 200 px) with 10 px elements, +1.0e-2 with 5
-    /// px, against 1.7e-4 px with exact coordinates; the scatter is the same
-    /// (see `tests/levelset.rs`).
-    Levelset {
-        /// Element side, pixels.
-        mesh_size: f64,
     },
 }
 
