@@ -96,8 +96,9 @@ use crate::error::Result;
 use crate::spline::Basis;
 use crate::virtual_image::Profile;
 
-/// Pixels whose parallel-curve Jacobian `1 - kappa r` is below this are left
-/// out: too close to (or beyond) the centre of curvature.
+/// Pixels (and levelset mesh nodes) whose parallel-curve Jacobian
+/// `1 - kappa r` is at or below this are left out: too close to (or beyond)
+/// the centre of curvature.
 const MIN_JACOBIAN: f64 = 0.1;
 /// Pixels per parallel task of [`Band::recentre`] and [`Band::bend_to`].
 const RECENTRE_CHUNK: usize = 4096;
