@@ -15,11 +15,12 @@
 //! weight `1 / (1 - kappa r)`.
 //!
 //! The steps, one a file:
-//! - [`build`](Band::new): check the parameters and the image, get the
-//!   pixels' rows from one of the two coordinate backends, store them;
+//! - `build`: [`BandParams`] checked against the curve and the image
+//!   ([`Band::new`]), the pixels' rows from the backend that [`Coords`]
+//!   names, stored as the band's columns;
 //! - `exact`: the closest-point projection of every pixel, started from
 //!   the closest chord of a polyline of the curve (`raster`: the chords
-//!   rasterised onto a grid of the image);
+//!   rasterised onto a grid of the image, in a [`BandScratch`]);
 //! - `levelset_rows` with [`levelset`]: the paper's finite-element
 //!   coordinates instead;
 //! - `window`: the weights, and the window of a band with a margin;
