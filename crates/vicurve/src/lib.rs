@@ -19,7 +19,6 @@ pub mod fit;
 pub mod image;
 pub mod interp;
 pub mod io;
-pub mod levelset;
 pub mod measurement;
 pub mod model;
 pub mod nurbs;
@@ -32,5 +31,7 @@ pub mod start;
 pub mod truth;
 pub mod virtual_image;
 
+/// The paper's levelset coordinates, at their old path (now under [`band`]).
+pub use band::levelset;
 pub use error::{Error, Result};
 pub use image::Image;

@@ -25,6 +25,7 @@
 //! interpolation smooth in the elements that straddle it; its distance to
 //! the curve (to the end point) decides whether it is used.
 
+use crate::band::MIN_JACOBIAN;
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -35,10 +36,6 @@ const EDGE: f64 = 1e-9;
 
 /// Marks an absent node, element or degree of freedom in index tables.
 pub(crate) const NONE: u32 = u32::MAX;
-
-/// Nodes whose parallel-curve Jacobian `1 - kappa r` is at or below this are
-/// not used (the band leaves out the pixels below the same limit).
-const MIN_JACOBIAN: f64 = 0.1;
 
 /// The exact curvilinear data of a mesh node.
 #[derive(Clone, Copy, Debug)]
@@ -97,174 +94,18 @@ impl Mesh {
         width: usize,
         height: usize,
     ) -> Result<Mesh> {
-        let l = curve.param_length();
-        let closed = curve.is_closed();
         let keep = half_width + h * std::f64::consts::SQRT_2;
         // Chords short enough that the closest one leads Newton to the global
         // closest point (as in the band); the search reaches a little farther
         // than `keep` to allow for the polyline's sagitta.
         let step = (0.5 * half_width).clamp(0.5, 4.0);
         let search = keep + step + 1.0;
-
-        let bb = curve.bounding_box();
-        let x_max = width as f64 - 1.0;
-        let y_max = height as f64 - 1.0;
-        let i_lo = ((bb[0] - search) / h).floor().max(0.0) as i64;
-        let j_lo = ((bb[1] - search) / h).floor().max(0.0) as i64;
-        let i_hi = ((bb[2] + search) / h).ceil().min((x_max / h).ceil()) as i64;
-        let j_hi = ((bb[3] + search) / h).ceil().min((y_max / h).ceil()) as i64;
-        if i_hi <= i_lo || j_hi <= j_lo {
-            let p = curve.point(0.0);
-            return Err(Error::CurveOutsideImage {
-                x: p[0],
-                y: p[1],
-                width,
-                height,
-            });
-        }
-        let cols = (i_hi - i_lo) as usize;
-        let rows = (j_hi - j_lo) as usize;
-        let (ni, nj) = (cols + 1, rows + 1);
-        let node_pos = |g: usize| {
-            let (i, j) = (g % ni, g / ni);
-            [(i_lo + i as i64) as f64 * h, (j_lo + j as i64) as f64 * h]
-        };
-
-        // Closest chord of each grid node within `search` of the polyline.
-        let count = ((l / step).ceil() as usize).max(4);
-        let params = curve.sample_params(if closed { count } else { count + 1 });
-        let verts: Vec<[f64; 2]> = params.iter().map(|&u| curve.point(u)).collect();
-        let nseg = if closed { verts.len() } else { verts.len() - 1 };
-        let mut best: Vec<ChordSearch> = (0..ni * nj)
-            .map(|_| ChordSearch {
-                d2: f64::INFINITY,
-                u: 0.0,
-            })
-            .collect();
-        for k in 0..nseg {
-            let a = verts[k];
-            let b = verts[(k + 1) % verts.len()];
-            let (ua, ub) = (
-                params[k],
-                if k + 1 < params.len() {
-                    params[k + 1]
-                } else {
-                    l
-                },
-            );
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let dd = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
-            let gi0 = (((a[0].min(b[0]) - search) / h).floor() as i64).max(i_lo);
-            let gi1 = (((a[0].max(b[0]) + search) / h).ceil() as i64).min(i_hi);
-            let gj0 = (((a[1].min(b[1]) - search) / h).floor() as i64).max(j_lo);
-            let gj1 = (((a[1].max(b[1]) + search) / h).ceil() as i64).min(j_hi);
-            for gj in gj0..=gj1 {
-                for gi in gi0..=gi1 {
-                    let g = (gj - j_lo) as usize * ni + (gi - i_lo) as usize;
-                    let p = node_pos(g);
-                    let (px, py) = (p[0] - a[0], p[1] - a[1]);
-                    let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
-                    let (ex, ey) = (px - t * d[0], py - t * d[1]);
-                    let d2 = ex * ex + ey * ey;
-                    if d2 < best[g].d2 {
-                        best[g] = ChordSearch {
-                            d2,
-                            u: ua + t * (ub - ua),
-                        };
-                    }
-                }
-            }
-        }
-
-        // Exact projection of the nodes near the curve; `None` for the
-        // nodes that no element may use.
-        let search2 = search * search;
-        let grid: Vec<Option<MeshNode>> = best
-            .par_iter()
-            .enumerate()
-            .map(|(g, b)| {
-                if b.d2 > search2 {
-                    return None;
-                }
-                let pos = node_pos(g);
-                node_data(curve, pos, b.u, keep)
-            })
-            .collect();
-
-        // Candidate cells: all four corners usable.
-        let corner_ids = |c: usize| {
-            let (ci, cj) = (c % cols, c / cols);
-            let g = cj * ni + ci;
-            [g, g + 1, g + ni + 1, g + ni]
-        };
-        let candidate: Vec<bool> = (0..cols * rows)
-            .map(|c| corner_ids(c).iter().all(|&g| grid[g].is_some()))
-            .collect();
-
-        // Keep the component (through shared corners) around the start.
-        let start = curve.point(0.0);
-        let mut parent: Vec<usize> = (0..ni * nj).collect();
-        for c in (0..cols * rows).filter(|&c| candidate[c]) {
-            let ids = corner_ids(c);
-            for &g in &ids[1..] {
-                union(&mut parent, ids[0], g);
-            }
-        }
-        let gx = start[0] / h - i_lo as f64;
-        let gy = start[1] / h - j_lo as f64;
-        let start_cell = cells_around(gx, gy, cols, rows)
-            .into_iter()
-            .flatten()
-            .find(|&c| candidate[c]);
-        let Some(start_cell) = start_cell else {
-            if !(start[0] >= 0.0 && start[1] >= 0.0 && start[0] <= x_max && start[1] <= y_max) {
-                return Err(Error::CurveOutsideImage {
-                    x: start[0],
-                    y: start[1],
-                    width,
-                    height,
-                });
-            }
-            return Err(Error::invalid(
-                "levelset mesh",
-                "no element around the start of the curve (is the curve inside the image?)",
-            ));
-        };
-        let root = find(&mut parent, corner_ids(start_cell)[0]);
-
-        let mut node_index = vec![NONE; ni * nj];
-        let mut nodes = Vec::new();
-        let mut elements = Vec::new();
-        let mut origins = Vec::new();
-        let mut cell_element = vec![NONE; cols * rows];
-        for c in 0..cols * rows {
-            if !candidate[c] || find(&mut parent, corner_ids(c)[0]) != root {
-                continue;
-            }
-            let mut corners = [0u32; 4];
-            for (k, &g) in corner_ids(c).iter().enumerate() {
-                if node_index[g] == NONE {
-                    node_index[g] = nodes.len() as u32;
-                    // Candidate corners are usable: `grid[g]` is `Some`.
-                    nodes.extend(grid[g]);
-                }
-                corners[k] = node_index[g];
-            }
-            cell_element[c] = elements.len() as u32;
-            elements.push(corners);
-            origins.push(node_pos(corner_ids(c)[0]));
-        }
-        Ok(Mesh {
-            h,
-            inv_h: 1.0 / h,
-            base: [i_lo, j_lo],
-            cols,
-            rows,
-            nodes,
-            elements,
-            origins,
-            cell_element,
-        })
+        let grid = NodeGrid::around(curve, search, h, width, height)?;
+        let best = grid.closest_chords(curve, step, search);
+        let nodes = grid.project_nodes(curve, &best, search, keep);
+        let candidate = grid.candidate_cells(&nodes);
+        let (parent, root) = grid.start_component(curve, &candidate, width, height)?;
+        Ok(grid.into_mesh(&nodes, &candidate, parent, root))
     }
 
     /// The element containing `(x, y)` (pixels) and the local coordinates
@@ -366,6 +207,257 @@ impl Mesh {
                 ]
             },
         )
+    }
+}
+
+/// The grid the mesh's nodes sit on: nodes `(i h, j h)` for `i` in
+/// `i_lo..=i_hi`, `j` in `j_lo..=j_hi` (`ni x nj` of them, numbered row
+/// after row from the lower corner), cells between them (`cols x rows`).
+struct NodeGrid {
+    h: f64,
+    i_lo: i64,
+    j_lo: i64,
+    i_hi: i64,
+    j_hi: i64,
+    cols: usize,
+    rows: usize,
+    ni: usize,
+}
+
+impl NodeGrid {
+    /// The grid over the points within `search` (pixels) of the curve's
+    /// control-polygon box, clipped to an image of `width x height`.
+    ///
+    /// Errors: [`Error::CurveOutsideImage`] when no cell is left.
+    fn around(
+        curve: &SplineCurve,
+        search: f64,
+        h: f64,
+        width: usize,
+        height: usize,
+    ) -> Result<NodeGrid> {
+        let bb = curve.bounding_box();
+        let x_max = width as f64 - 1.0;
+        let y_max = height as f64 - 1.0;
+        let i_lo = ((bb[0] - search) / h).floor().max(0.0) as i64;
+        let j_lo = ((bb[1] - search) / h).floor().max(0.0) as i64;
+        let i_hi = ((bb[2] + search) / h).ceil().min((x_max / h).ceil()) as i64;
+        let j_hi = ((bb[3] + search) / h).ceil().min((y_max / h).ceil()) as i64;
+        if i_hi <= i_lo || j_hi <= j_lo {
+            let p = curve.point(0.0);
+            return Err(Error::CurveOutsideImage {
+                x: p[0],
+                y: p[1],
+                width,
+                height,
+            });
+        }
+        let cols = (i_hi - i_lo) as usize;
+        let rows = (j_hi - j_lo) as usize;
+        Ok(NodeGrid {
+            h,
+            i_lo,
+            j_lo,
+            i_hi,
+            j_hi,
+            cols,
+            rows,
+            ni: cols + 1,
+        })
+    }
+
+    /// Number of grid nodes.
+    fn nodes(&self) -> usize {
+        self.ni * (self.rows + 1)
+    }
+
+    /// Position of grid node `g`, pixels.
+    fn node_pos(&self, g: usize) -> [f64; 2] {
+        let (i, j) = (g % self.ni, g / self.ni);
+        [
+            (self.i_lo + i as i64) as f64 * self.h,
+            (self.j_lo + j as i64) as f64 * self.h,
+        ]
+    }
+
+    /// The grid nodes at the corners of cell `c`, in the elements' order.
+    fn corner_ids(&self, c: usize) -> [usize; 4] {
+        let (ci, cj) = (c % self.cols, c / self.cols);
+        let g = cj * self.ni + ci;
+        [g, g + 1, g + self.ni + 1, g + self.ni]
+    }
+
+    /// The closest chord of each grid node, of a polyline of `curve` with
+    /// chords about `step` pixels long, among those within `search` pixels
+    /// of it (infinitely far when none is).
+    fn closest_chords(&self, curve: &SplineCurve, step: f64, search: f64) -> Vec<ChordSearch> {
+        let (h, l) = (self.h, curve.param_length());
+        let count = ((l / step).ceil() as usize).max(4);
+        let closed = curve.is_closed();
+        let params = curve.sample_params(if closed { count } else { count + 1 });
+        let verts: Vec<[f64; 2]> = params.iter().map(|&u| curve.point(u)).collect();
+        let nseg = if closed { verts.len() } else { verts.len() - 1 };
+        let mut best: Vec<ChordSearch> = (0..self.nodes())
+            .map(|_| ChordSearch {
+                d2: f64::INFINITY,
+                u: 0.0,
+            })
+            .collect();
+        for k in 0..nseg {
+            let a = verts[k];
+            let b = verts[(k + 1) % verts.len()];
+            let (ua, ub) = (
+                params[k],
+                if k + 1 < params.len() {
+                    params[k + 1]
+                } else {
+                    l
+                },
+            );
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let dd = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
+            let gi0 = (((a[0].min(b[0]) - search) / h).floor() as i64).max(self.i_lo);
+            let gi1 = (((a[0].max(b[0]) + search) / h).ceil() as i64).min(self.i_hi);
+            let gj0 = (((a[1].min(b[1]) - search) / h).floor() as i64).max(self.j_lo);
+            let gj1 = (((a[1].max(b[1]) + search) / h).ceil() as i64).min(self.j_hi);
+            for gj in gj0..=gj1 {
+                for gi in gi0..=gi1 {
+                    let g = (gj - self.j_lo) as usize * self.ni + (gi - self.i_lo) as usize;
+                    let p = self.node_pos(g);
+                    let (px, py) = (p[0] - a[0], p[1] - a[1]);
+                    let t = ((px * d[0] + py * d[1]) / dd).clamp(0.0, 1.0);
+                    let (ex, ey) = (px - t * d[0], py - t * d[1]);
+                    let d2 = ex * ex + ey * ey;
+                    if d2 < best[g].d2 {
+                        best[g] = ChordSearch {
+                            d2,
+                            u: ua + t * (ub - ua),
+                        };
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The exact data of the grid nodes whose closest chord `best` is
+    /// within `search` pixels; `None` for the nodes no element may use
+    /// (farther than `keep` from the curve, see [`node_data`]).
+    fn project_nodes(
+        &self,
+        curve: &SplineCurve,
+        best: &[ChordSearch],
+        search: f64,
+        keep: f64,
+    ) -> Vec<Option<MeshNode>> {
+        let search2 = search * search;
+        best.par_iter()
+            .enumerate()
+            .map(|(g, b)| {
+                if b.d2 > search2 {
+                    return None;
+                }
+                node_data(curve, self.node_pos(g), b.u, keep)
+            })
+            .collect()
+    }
+
+    /// The cells whose four corners are usable (`Some` in `grid`).
+    fn candidate_cells(&self, grid: &[Option<MeshNode>]) -> Vec<bool> {
+        (0..self.cols * self.rows)
+            .map(|c| self.corner_ids(c).iter().all(|&g| grid[g].is_some()))
+            .collect()
+    }
+
+    /// The components (through shared corners) of the `candidate` cells,
+    /// as a union-find forest over the grid nodes, and the root of the one
+    /// around the curve's start.
+    ///
+    /// Errors: [`Error::CurveOutsideImage`] when the start is outside the
+    /// image, [`Error::InvalidParameter`] when no candidate cell holds it.
+    fn start_component(
+        &self,
+        curve: &SplineCurve,
+        candidate: &[bool],
+        width: usize,
+        height: usize,
+    ) -> Result<(Vec<usize>, usize)> {
+        let start = curve.point(0.0);
+        let mut parent: Vec<usize> = (0..self.nodes()).collect();
+        for c in (0..self.cols * self.rows).filter(|&c| candidate[c]) {
+            let ids = self.corner_ids(c);
+            for &g in &ids[1..] {
+                union(&mut parent, ids[0], g);
+            }
+        }
+        let gx = start[0] / self.h - self.i_lo as f64;
+        let gy = start[1] / self.h - self.j_lo as f64;
+        let start_cell = cells_around(gx, gy, self.cols, self.rows)
+            .into_iter()
+            .flatten()
+            .find(|&c| candidate[c]);
+        let Some(start_cell) = start_cell else {
+            let (x_max, y_max) = (width as f64 - 1.0, height as f64 - 1.0);
+            if !(start[0] >= 0.0 && start[1] >= 0.0 && start[0] <= x_max && start[1] <= y_max) {
+                return Err(Error::CurveOutsideImage {
+                    x: start[0],
+                    y: start[1],
+                    width,
+                    height,
+                });
+            }
+            return Err(Error::invalid(
+                "levelset mesh",
+                "no element around the start of the curve (is the curve inside the image?)",
+            ));
+        };
+        let root = find(&mut parent, self.corner_ids(start_cell)[0]);
+        Ok((parent, root))
+    }
+
+    /// The mesh of the `candidate` cells in the component `root` of
+    /// `parent`, with the used nodes of `grid` numbered in the order the
+    /// cells (row after row) first use them.
+    fn into_mesh(
+        self,
+        grid: &[Option<MeshNode>],
+        candidate: &[bool],
+        mut parent: Vec<usize>,
+        root: usize,
+    ) -> Mesh {
+        let mut node_index = vec![NONE; self.nodes()];
+        let mut nodes = Vec::new();
+        let mut elements = Vec::new();
+        let mut origins = Vec::new();
+        let mut cell_element = vec![NONE; self.cols * self.rows];
+        for c in 0..self.cols * self.rows {
+            if !candidate[c] || find(&mut parent, self.corner_ids(c)[0]) != root {
+                continue;
+            }
+            let mut corners = [0u32; 4];
+            for (k, &g) in self.corner_ids(c).iter().enumerate() {
+                if node_index[g] == NONE {
+                    node_index[g] = nodes.len() as u32;
+                    // Candidate corners are usable: `grid[g]` is `Some`.
+                    nodes.extend(grid[g]);
+                }
+                corners[k] = node_index[g];
+            }
+            cell_element[c] = elements.len() as u32;
+            elements.push(corners);
+            origins.push(self.node_pos(self.corner_ids(c)[0]));
+        }
+        Mesh {
+            h: self.h,
+            inv_h: 1.0 / self.h,
+            base: [self.i_lo, self.j_lo],
+            cols: self.cols,
+            rows: self.rows,
+            nodes,
+            elements,
+            origins,
+            cell_element,
+        }
     }
 }
 

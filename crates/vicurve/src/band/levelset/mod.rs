@@ -245,12 +245,10 @@ impl LevelsetCoords {
         let nodal = solve::solve(system)?;
         let length = curve.param_length();
         let mut a = nodal.a;
-        if let Some(cut) = &cut {
-            if options.jump == Jump::Prescribed {
-                for (ai, &enriched) in a.iter_mut().zip(&cut.enriched) {
-                    if enriched {
-                        *ai = length;
-                    }
+        if let (Some(cut), Jump::Prescribed) = (&cut, options.jump) {
+            for (ai, &enriched) in a.iter_mut().zip(&cut.enriched) {
+                if enriched {
+                    *ai = length;
                 }
             }
         }
@@ -270,63 +268,82 @@ impl LevelsetCoords {
             half_bandwidth,
         };
 
-        // Gauge: s = 0 at the start, on the side after the cut.
-        let start = curve.point(0.0);
-        let (e, xi, eta) = coords.mesh.locate(start[0], start[1]).ok_or_else(|| {
+        coords.fix_gauge(curve.point(0.0))?;
+        coords.nodes = coords.node_views();
+        coords.elements = coords.element_views();
+        Ok(coords)
+    }
+
+    /// The gauge: shift `s` to 0 at the curve's start `start`, on the side
+    /// after the cut, and take the jump across the cut there.
+    ///
+    /// Errors: [`Error::InvalidParameter`] when the start is not inside the
+    /// mesh.
+    fn fix_gauge(&mut self, start: [f64; 2]) -> Result<()> {
+        let (e, xi, eta) = self.mesh.locate(start[0], start[1]).ok_or_else(|| {
             Error::invalid(
                 "levelset mesh",
                 "the start of the curve is not inside the mesh",
             )
         })?;
-        let shift = coords.interpolate(e, xi, eta, false).0;
-        for s in &mut coords.s {
+        let shift = self.interpolate(e, xi, eta, false).0;
+        for s in &mut self.s {
             *s -= shift;
         }
-        if let Some(cut) = &coords.cut {
-            let tol = 1e-9 * coords.mesh.h;
-            coords.jump = (0..coords.mesh.elements.len())
-                .filter(|&e| cut.element_cut[e])
-                .find_map(|e| {
-                    let o = coords.mesh.origins[e];
-                    let xi = (start[0] - o[0]) / coords.mesh.h;
-                    let eta = (start[1] - o[1]) / coords.mesh.h;
-                    let inside =
-                        (-tol..=1.0 + tol).contains(&xi) && (-tol..=1.0 + tol).contains(&eta);
-                    inside.then(|| {
-                        let (xi, eta) = (xi.clamp(0.0, 1.0), eta.clamp(0.0, 1.0));
-                        coords.interpolate(e, xi, eta, true).0
-                            - coords.interpolate(e, xi, eta, false).0
-                    })
-                });
-        }
+        self.jump = self.jump_at(start);
+        Ok(())
+    }
 
-        coords.nodes = (0..coords.mesh.nodes.len())
+    /// The jump of `s` across the cut at the point `start` of the cut line
+    /// (closed curves; `None` for open ones).
+    fn jump_at(&self, start: [f64; 2]) -> Option<f64> {
+        let cut = self.cut.as_ref()?;
+        let tol = 1e-9 * self.mesh.h;
+        (0..self.mesh.elements.len())
+            .filter(|&e| cut.element_cut[e])
+            .find_map(|e| {
+                let o = self.mesh.origins[e];
+                let xi = (start[0] - o[0]) / self.mesh.h;
+                let eta = (start[1] - o[1]) / self.mesh.h;
+                let inside = (-tol..=1.0 + tol).contains(&xi) && (-tol..=1.0 + tol).contains(&eta);
+                inside.then(|| {
+                    let (xi, eta) = (xi.clamp(0.0, 1.0), eta.clamp(0.0, 1.0));
+                    self.interpolate(e, xi, eta, true).0 - self.interpolate(e, xi, eta, false).0
+                })
+            })
+    }
+
+    /// The nodes with their values, for [`LevelsetCoords::nodes`].
+    fn node_views(&self) -> Vec<Node> {
+        (0..self.mesh.nodes.len())
             .map(|i| {
-                let n = &coords.mesh.nodes[i];
+                let n = &self.mesh.nodes[i];
                 Node {
                     position: n.pos,
-                    s: coords.s[i],
+                    s: self.s[i],
                     r: n.r,
                     foot: n.foot,
-                    enrichment: coords
+                    enrichment: self
                         .cut
                         .as_ref()
                         .is_some_and(|c| c.enriched[i])
-                        .then_some(coords.a[i]),
+                        .then_some(self.a[i]),
                 }
             })
-            .collect();
-        coords.elements = coords
-            .mesh
+            .collect()
+    }
+
+    /// The elements, for [`LevelsetCoords::elements`].
+    fn element_views(&self) -> Vec<Element> {
+        self.mesh
             .elements
             .iter()
             .enumerate()
             .map(|(e, c)| Element {
                 nodes: c.map(|i| i as usize),
-                cut: coords.cut.as_ref().is_some_and(|cut| cut.element_cut[e]),
+                cut: self.cut.as_ref().is_some_and(|cut| cut.element_cut[e]),
             })
-            .collect();
-        Ok(coords)
+            .collect()
     }
 
     /// `(s, r)` at the point `(x, y)` (pixels), interpolated from the nodes;

@@ -32,7 +32,7 @@
 //! right-hand side.
 
 use super::cut::Cut;
-use super::mesh::{Mesh, NONE};
+use super::mesh::{Mesh, MeshNode, NONE};
 use super::quadrature::{polygon_rule, shape, shape_gradients, square_rule};
 use super::{Jump, LevelsetOptions, TangentSource, Target};
 use crate::curve::SplineCurve;
@@ -83,78 +83,111 @@ pub(crate) struct Problem<'a> {
     pub options: LevelsetOptions,
 }
 
+/// An element's corner nodes and their shape functions at a point.
+struct Corners<'a> {
+    nodes: [&'a MeshNode; 4],
+    shape: [f64; 4],
+}
+
+impl Corners<'_> {
+    /// The bilinear interpolation at the point of the corner values `f(k)`.
+    fn interp(&self, f: impl Fn(usize) -> f64) -> f64 {
+        (0..4).map(|k| self.shape[k] * f(k)).sum::<f64>()
+    }
+}
+
 impl Problem<'_> {
     /// The target `g` at local coordinates `(xi, eta)` of element `e`.
     fn target(&self, e: usize, xi: f64, eta: f64) -> [f64; 2] {
-        let mesh = self.mesh;
-        let corners = mesh.elements[e].map(|i| &mesh.nodes[i as usize]);
-        let n = shape(xi, eta);
-        let interp = |f: &dyn Fn(usize) -> f64| (0..4).map(|k| n[k] * f(k)).sum::<f64>();
-        let parameter = self.options.target == Target::Parameter;
         match self.options.tangent {
-            TangentSource::Exact => {
-                let curve = self.curve;
-                let l = curve.param_length();
-                let closed = curve.is_closed();
-                // Newton's start: the corners' feet, interpolated (unwrapped
-                // around the first corner on a closed curve).
-                let f0 = corners[0].foot;
-                let mut u0 = interp(&|k| {
-                    let d = corners[k].foot - f0;
-                    if closed {
-                        f0 + d - l * (d / l).round()
-                    } else {
-                        f0 + d
-                    }
-                });
-                u0 = if closed {
-                    u0.rem_euclid(l)
-                } else {
-                    u0.clamp(0.0, l)
-                };
-                let p = mesh.point(e, xi, eta);
-                let pr = curve.project(p[0], p[1], u0);
-                if pr.at_end {
-                    // The tangent extension past the end.
-                    let end = if pr.u <= 0.5 * l { 0.0 } else { l };
-                    let f = curve.frame(end);
-                    let w = if parameter { 1.0 / f.speed } else { 1.0 };
-                    return [w * f.tangent[0], w * f.tangent[1]];
-                }
-                // The tangent from the projection's normal n = (-t_y, t_x);
-                // the speed, which varies slowly along the curve (about 1
-                // for a chord-length parametrisation), from the corners.
-                let t = [pr.normal[1], -pr.normal[0]];
-                let w = if parameter {
-                    let speed = interp(&|k| corners[k].speed);
-                    1.0 / (speed * (1.0 - pr.curvature * pr.r).max(MIN_TARGET_JACOBIAN))
-                } else {
-                    1.0
-                };
-                [w * t[0], w * t[1]]
-            }
-            TangentSource::Levelset => {
-                // t = grad r turned by -90 degrees: (dr/dy, -dr/dx). With
-                // grad r = n = (-t_y, t_x) this is (t_x, t_y), the curve's
-                // tangent, pointing the way the parameter grows.
-                let g = shape_gradients(xi, eta);
-                let gx: f64 = (0..4).map(|k| g[k][0] * corners[k].r).sum::<f64>() / mesh.h;
-                let gy: f64 = (0..4).map(|k| g[k][1] * corners[k].r).sum::<f64>() / mesh.h;
-                let norm = gx.hypot(gy);
-                if norm <= 0.0 {
-                    return [0.0, 0.0];
-                }
-                let w = if parameter {
-                    let speed = interp(&|k| corners[k].speed);
-                    let kappa = interp(&|k| corners[k].curvature);
-                    let r = interp(&|k| corners[k].r);
-                    1.0 / (speed * (1.0 - kappa * r).max(MIN_TARGET_JACOBIAN))
-                } else {
-                    1.0
-                };
-                [w * gy / norm, -w * gx / norm]
-            }
+            TangentSource::Exact => self.exact_target(e, xi, eta),
+            TangentSource::Levelset => self.levelset_target(e, xi, eta),
         }
+    }
+
+    /// The corners of element `e` with their shape functions at `(xi, eta)`.
+    fn corners(&self, e: usize, xi: f64, eta: f64) -> Corners<'_> {
+        let mesh = self.mesh;
+        Corners {
+            nodes: mesh.elements[e].map(|i| &mesh.nodes[i as usize]),
+            shape: shape(xi, eta),
+        }
+    }
+
+    /// [`Problem::target`] with the tangent of the point's exact closest
+    /// point ([`TangentSource::Exact`]).
+    fn exact_target(&self, e: usize, xi: f64, eta: f64) -> [f64; 2] {
+        let mesh = self.mesh;
+        let c = self.corners(e, xi, eta);
+        let corners = c.nodes;
+        let parameter = self.options.target == Target::Parameter;
+        let curve = self.curve;
+        let l = curve.param_length();
+        let closed = curve.is_closed();
+        // Newton's start: the corners' feet, interpolated (unwrapped
+        // around the first corner on a closed curve).
+        let f0 = corners[0].foot;
+        let mut u0 = c.interp(|k| {
+            let d = corners[k].foot - f0;
+            if closed {
+                f0 + d - l * (d / l).round()
+            } else {
+                f0 + d
+            }
+        });
+        u0 = if closed {
+            u0.rem_euclid(l)
+        } else {
+            u0.clamp(0.0, l)
+        };
+        let p = mesh.point(e, xi, eta);
+        let pr = curve.project(p[0], p[1], u0);
+        if pr.at_end {
+            // The tangent extension past the end.
+            let end = if pr.u <= 0.5 * l { 0.0 } else { l };
+            let f = curve.frame(end);
+            let w = if parameter { 1.0 / f.speed } else { 1.0 };
+            return [w * f.tangent[0], w * f.tangent[1]];
+        }
+        // The tangent from the projection's normal n = (-t_y, t_x);
+        // the speed, which varies slowly along the curve (about 1
+        // for a chord-length parametrisation), from the corners.
+        let t = [pr.normal[1], -pr.normal[0]];
+        let w = if parameter {
+            let speed = c.interp(|k| corners[k].speed);
+            1.0 / (speed * (1.0 - pr.curvature * pr.r).max(MIN_TARGET_JACOBIAN))
+        } else {
+            1.0
+        };
+        [w * t[0], w * t[1]]
+    }
+
+    /// [`Problem::target`] with the tangent from the interpolated `r`
+    /// ([`TangentSource::Levelset`], the paper's).
+    fn levelset_target(&self, e: usize, xi: f64, eta: f64) -> [f64; 2] {
+        let mesh = self.mesh;
+        let c = self.corners(e, xi, eta);
+        let corners = c.nodes;
+        let parameter = self.options.target == Target::Parameter;
+        // t = grad r turned by -90 degrees: (dr/dy, -dr/dx). With
+        // grad r = n = (-t_y, t_x) this is (t_x, t_y), the curve's
+        // tangent, pointing the way the parameter grows.
+        let g = shape_gradients(xi, eta);
+        let gx: f64 = (0..4).map(|k| g[k][0] * corners[k].r).sum::<f64>() / mesh.h;
+        let gy: f64 = (0..4).map(|k| g[k][1] * corners[k].r).sum::<f64>() / mesh.h;
+        let norm = gx.hypot(gy);
+        if norm <= 0.0 {
+            return [0.0, 0.0];
+        }
+        let w = if parameter {
+            let speed = c.interp(|k| corners[k].speed);
+            let kappa = c.interp(|k| corners[k].curvature);
+            let r = c.interp(|k| corners[k].r);
+            1.0 / (speed * (1.0 - kappa * r).max(MIN_TARGET_JACOBIAN))
+        } else {
+            1.0
+        };
+        [w * gy / norm, -w * gx / norm]
     }
 
     /// The system of element `e`.
@@ -208,16 +241,22 @@ impl Problem<'_> {
 
     /// Assemble the global system.
     pub(crate) fn assemble(&self) -> Result<System> {
-        let mesh = self.mesh;
-        let l = self.curve.param_length();
-        let closed = self.curve.is_closed();
-        let systems: Vec<ElementSystem> = (0..mesh.elements.len())
+        let systems: Vec<ElementSystem> = (0..self.mesh.elements.len())
             .into_par_iter()
             .map(|e| self.element(e))
             .collect();
+        let dofs = self.number_unknowns(&systems)?;
+        let q = self.half_bandwidth(&dofs)?;
+        self.scatter(&systems, dofs, q)
+    }
 
-        // Enriched unknowns: free ones only, and only where their function
-        // has some support.
+    /// The unknowns, numbered by foot parameter: every node's `s` but the
+    /// one in the middle of the order (fixed), and the free enriched values
+    /// where their function has some support (`systems`' diagonal).
+    ///
+    /// Errors: [`Error::InvalidParameter`] when nothing is left unknown.
+    fn number_unknowns(&self, systems: &[ElementSystem]) -> Result<Dofs> {
+        let mesh = self.mesh;
         let n_nodes = mesh.nodes.len();
         let mut enr_diag = vec![0.0; n_nodes];
         if let Some(cut) = self.cut {
@@ -233,8 +272,6 @@ impl Problem<'_> {
         let has_enr = |i: usize| {
             free && self.cut.is_some_and(|c| c.enriched[i]) && enr_diag[i] > MIN_ENRICHED_DIAGONAL
         };
-
-        // Number by foot parameter; fix the node in the middle of the order.
         let mut order: Vec<usize> = (0..n_nodes).collect();
         order.sort_by(|&a, &b| mesh.nodes[a].foot.total_cmp(&mesh.nodes[b].foot));
         let fixed = order[n_nodes / 2];
@@ -253,22 +290,35 @@ impl Problem<'_> {
                 dofs.n += 1;
             }
         }
-        let n = dofs.n;
-        if n == 0 {
+        if dofs.n == 0 {
             return Err(Error::invalid(
                 "levelset mesh",
                 "the mesh has a single node; use a smaller mesh size",
             ));
         }
-        let local = |e: usize| {
-            let c = mesh.elements[e];
-            let mut idx = [NONE; 8];
-            for k in 0..4 {
-                idx[k] = dofs.std[c[k] as usize];
-                idx[k + 4] = dofs.enr[c[k] as usize];
-            }
-            idx
-        };
+        Ok(dofs)
+    }
+
+    /// The unknowns of element `e`'s 8 local ones ([`NONE`] where fixed or
+    /// absent).
+    fn local(&self, dofs: &Dofs, e: usize) -> [u32; 8] {
+        let c = self.mesh.elements[e];
+        let mut idx = [NONE; 8];
+        for k in 0..4 {
+            idx[k] = dofs.std[c[k] as usize];
+            idx[k + 4] = dofs.enr[c[k] as usize];
+        }
+        idx
+    }
+
+    /// The half-bandwidth of the matrix in the numbering `dofs` (around
+    /// the loop for a closed curve).
+    ///
+    /// Errors: [`Error::InvalidParameter`] when the banded storage would
+    /// exceed [`MAX_BAND_ENTRIES`].
+    fn half_bandwidth(&self, dofs: &Dofs) -> Result<usize> {
+        let n = dofs.n;
+        let closed = self.curve.is_closed();
         let distance = |a: u32, b: u32| {
             let d = (a as usize).abs_diff(b as usize);
             if closed {
@@ -278,8 +328,8 @@ impl Problem<'_> {
             }
         };
         let mut q = 0;
-        for e in 0..mesh.elements.len() {
-            let idx = local(e);
+        for e in 0..self.mesh.elements.len() {
+            let idx = self.local(dofs, e);
             for a in idx.iter().filter(|&&a| a != NONE) {
                 for b in idx.iter().filter(|&&b| b != NONE) {
                     q = q.max(distance(*a, *b));
@@ -295,10 +345,20 @@ impl Problem<'_> {
                 ),
             ));
         }
-        let mut matrix = SymBandMatrix::zeros(n, q, closed)?;
+        Ok(q)
+    }
+
+    /// The element systems `systems` added into the global banded matrix
+    /// (half-bandwidth `q`) and right-hand side, the prescribed enrichment
+    /// moved to the right.
+    fn scatter(&self, systems: &[ElementSystem], dofs: Dofs, q: usize) -> Result<System> {
+        let n = dofs.n;
+        let l = self.curve.param_length();
+        let free = self.options.jump == Jump::Free;
+        let mut matrix = SymBandMatrix::zeros(n, q, self.curve.is_closed())?;
         let mut rhs = vec![0.0; n];
         for (e, sys) in systems.iter().enumerate() {
-            let idx = local(e);
+            let idx = self.local(&dofs, e);
             // Prescribed enrichment: a = L on every corner of a cut element.
             let known = match self.cut {
                 Some(cut) if !free && cut.element_cut[e] => l,

@@ -1,0 +1,114 @@
+//! The band's pixels by exact closest-point projection: the closest chord
+//! of a polyline of the curve gives each pixel near it a starting parameter
+//! (`raster`), Newton's method on the exact curve refines it
+//! ([`crate::curve::SplineCurve::project`]).
+
+use super::build::{Candidate, Foot, Pixels};
+use super::raster::{unpack, Chords, GridShape};
+use super::{BandScratch, MIN_JACOBIAN};
+use rayon::prelude::*;
+
+/// Cells of the band's grid per parallel task of the exact projection.
+const TOUCHED_CHUNK: usize = 2048;
+
+impl Pixels<'_> {
+    /// The band pixels by exact projection, row by row (raster order).
+    pub(super) fn exact_rows(&self, scratch: &mut BandScratch) -> Vec<Vec<Candidate>> {
+        let chords = Chords::new(self.curve, self.reach);
+        // A pixel within `reach` of the curve is within `reach + sagitta`
+        // of its nearest chord, which the grid reaches with a pixel to
+        // spare; only such pixels need the exact projection.
+        let sagitta = chords.sagitta();
+        let grid = GridShape::around(
+            self.curve,
+            self.reach + sagitta + 1.0,
+            self.width,
+            self.height,
+        );
+        let mut touched = scratch.rasterize(&chords, &grid);
+        // Raster order, whatever order the chords reached the cells in.
+        touched.par_sort_unstable();
+        let cutoff2 = (self.reach + sagitta + 1e-6).powi(2);
+        let rows = self.project_cells(&grid, scratch.nearest(), &touched, cutoff2);
+        scratch.clear(&touched);
+        rows
+    }
+
+    /// The cells `touched` (sorted) of the grid `nearest` (the packed
+    /// closest chords of [`BandScratch::rasterize`]) refined on the exact
+    /// curve, in parallel runs of rows: the band's pixels among those whose
+    /// chord is within `sqrt(cutoff2)` pixels.
+    fn project_cells(
+        &self,
+        grid: &GridShape,
+        nearest: &[u64],
+        touched: &[u32],
+        cutoff2: f64,
+    ) -> Vec<Vec<Candidate>> {
+        // Pixels that see both sides of a corner (see `curve/corners.rs`).
+        let clearances = self.curve.corner_clearances();
+        let cell = CellSearch {
+            grid,
+            nearest,
+            cutoff2,
+            clearances: &clearances,
+        };
+        touched
+            .par_chunks(TOUCHED_CHUNK)
+            .map(|cells| {
+                cells
+                    .iter()
+                    .filter_map(|&c| self.project_cell(&cell, c as usize))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The band pixel of grid cell `c`, if it is one: kept (not thinned
+    /// out), its chord within the cutoff, its closest point an interior
+    /// point of the curve within `reach`, on the near side of the centre of
+    /// curvature and clear of the corners.
+    fn project_cell(&self, cell: &CellSearch, c: usize) -> Option<Candidate> {
+        let grid = cell.grid;
+        let (i, j) = (c % grid.gw, c / grid.gw);
+        if self.thinned_out(grid.gx0 + i, grid.gy0 + j) {
+            return None;
+        }
+        let (key, u0) = unpack(cell.nearest[c]);
+        if f64::from(key) - 1.0 > cell.cutoff2 {
+            return None;
+        }
+        let x = (grid.gx0 + i) as f64;
+        let y = (grid.gy0 + j) as f64;
+        let pr = self.curve.project(x, y, f64::from(u0));
+        let jacobian = 1.0 - pr.curvature * pr.r;
+        if pr.at_end || pr.r.abs() >= self.reach || jacobian <= MIN_JACOBIAN {
+            return None;
+        }
+        if cell
+            .clearances
+            .iter()
+            .any(|(v, radius)| (x - v[0]).hypot(y - v[1]) < *radius)
+        {
+            return None;
+        }
+        let foot = Foot {
+            pos: [x, y],
+            s: pr.u,
+            r: pr.r,
+            normal: pr.normal,
+            curvature: pr.curvature,
+        };
+        Some(self.candidate(foot, jacobian))
+    }
+}
+
+/// What [`Pixels::project_cell`] reads: the grid, its packed closest
+/// chords, the squared cutoff distance (px^2) and the corners' clearances
+/// ([`crate::curve::SplineCurve::corner_clearances`]).
+struct CellSearch<'a> {
+    grid: &'a GridShape,
+    nearest: &'a [u64],
+    cutoff2: f64,
+    clearances: &'a [([f64; 2], f64)],
+}

@@ -1,0 +1,317 @@
+//! The narrow band: the pixels around a reference curve, with their
+//! curvilinear coordinates `(s, r)`.
+//!
+//! A pixel centre `X` belongs to the band of half-width `R` around the
+//! reference curve `x0` when its exact closest point `x0(s)` is an interior
+//! point of the curve (not an end of an open curve: pixels past the ends are
+//! left out), its signed distance `r = (X - x0(s)) . n(s)` satisfies
+//! `|r| < R`, and it is on the near side of the local centre of curvature
+//! (`1 - kappa r > 0.1`; beyond, the closest point is ambiguous).
+//!
+//! Everything that depends only on the reference curve is computed here,
+//! once per reference: `s`, `r`, the normal, the `p + 1` non-zero
+//! displacement basis values at `s`, the virtual image profile
+//! `gamma` with its derivative, the curvature at the foot and the pixel's
+//! weight `1 / (1 - kappa r)`.
+//!
+//! The steps, one a file:
+//! - `build`: [`BandParams`] checked against the curve and the image
+//!   ([`Band::new`]), the pixels' rows from the backend that [`Coords`]
+//!   names, stored as the band's columns;
+//! - `exact`: the closest-point projection of every pixel, started from
+//!   the closest chord of a polyline of the curve (`raster`: the chords
+//!   rasterised onto a grid of the image, in a [`BandScratch`]);
+//! - `levelset_rows` with [`levelset`]: the paper's finite-element
+//!   coordinates instead;
+//! - `window`: the weights, and the window of a band with a margin;
+//! - `bend`: the displaced curve's curvature for a kept band.
+//!
+//! # Why the weight
+//! Pixels are uniform in the plane, so in `(s, r)` their density is
+//! `1 - kappa r`: a convex edge has more band pixels outside than inside.
+//! Where the physical profile differs from the virtual one (a sharp or
+//! blurred step under the sine profile), the residual is antisymmetric in
+//! `r` and this density tilts its balance: the curve moves by about
+//! `0.1 R^2 kappa`. Weighting each pixel by the inverse density makes the
+//! band uniform in `(s, r)`, as it is along a straight edge, and removes
+//! that bias; it changes nothing where the profiles match.
+//!
+//! The closest point is found in two steps: a search over a polyline of the
+//! curve (chords about `R / 2` long) gives each pixel a starting parameter,
+//! then Newton's method on the exact curve refines it ([`SplineCurve::project`]).
+//!
+//! # Margin and window
+//! A band built with a margin ([`Band::build_windowed`]) holds the pixels
+//! within `R + margin` of the reference, but only those within `R` of the
+//! curve displaced by the current `U` count ([`Band::recentre`]): their
+//! weights are the band's [`weights`](Band::full_weights), the others' 0.
+//! The pixels that count are then those around the displaced curve,
+//! whatever the reference, as long as `|U|` stays within the margin: the
+//! result no longer depends on the reference through the band's edges
+//! (where the physical profile differs from the virtual one, a band
+//! centred on the reference and not on the edge tips the balance of the
+//! residuals by a fraction of `U`).
+//!
+//! # The displaced curve's curvature
+//! The pixel-edge profile depends on the edge's curvature (a blurred
+//! curved edge's half level lies `(sigma^2 + 1/12) kappa / 2` off it),
+//! which it takes from the reference. A band that serves several frames of
+//! a sequence (`fit::TrackCache`) has a reference a few frames old, and a
+//! curve that shrinks, grows or bends in the meantime no longer has its
+//! curvature: such a run takes the curvature of the curve it starts from
+//! instead ([`Band::bend_to`]), as a band of its own, built on that curve,
+//! would. For the curve displaced by `U` it is `kappa / (1 - kappa U) +
+//! U'' / (1 - kappa U)^2` (`dt/ds = kappa n`; derivatives along the
+//! reference's parameter, which is close to its arc length; terms in
+//! `U'^2` and `U U'` left out): a parallel curve's plus the bending of `U`
+//! itself, which cancel for a rigid motion. It stays fixed during the run:
+//! the displacement's own `U''` in the iteration would also take the
+//! short wiggles of the noise for curvature and amplify them (undoing the
+//! blur's smoothing of a wiggly edge).
+//!
+//! # Levelset coordinates
+//! With [`Coords::Levelset`] (the paper's way, method section 7) the pixels
+//! get `s` and `r` by bilinear interpolation of the nodal values of a
+//! [`LevelsetCoords`](levelset::LevelsetCoords) mesh instead: no pixel is
+//! projected. The pixel's normal and curvature, which the exact backend
+//! takes at its closest point, are then the curve's at the interpolated
+//! `s`. A pixel belongs to the band when it lies in the meshed domain,
+//! `|r| < R`, `1 - kappa r > 0.1` and, for an open curve, `0 < s < L` (the
+//! exact backend's "closest point is not an end").
+
+mod bend;
+mod build;
+mod coords;
+mod exact;
+pub mod levelset;
+mod levelset_rows;
+mod raster;
+mod window;
+
+pub use build::BandParams;
+pub use coords::Coords;
+pub use raster::BandScratch;
+
+use crate::curve::SplineCurve;
+use crate::error::Result;
+use crate::spline::Basis;
+use crate::virtual_image::Profile;
+
+/// Pixels (and levelset mesh nodes) whose parallel-curve Jacobian
+/// `1 - kappa r` is at or below this are left out: too close to (or beyond)
+/// the centre of curvature.
+const MIN_JACOBIAN: f64 = 0.1;
+/// Pixels per parallel task of [`Band::recentre`] and [`Band::bend_to`].
+const RECENTRE_CHUNK: usize = 4096;
+
+/// The band pixels and their precomputed data; see the [module docs](self).
+#[derive(Clone, Debug)]
+pub struct Band {
+    half_width: f64,
+    /// Pixels out to `half_width + margin` are kept; see the module docs.
+    margin: f64,
+    /// Pixels within `half_width` of the displaced curve at the last
+    /// [`Band::recentre`] (all of them without a margin).
+    inside: usize,
+    profile: Profile,
+    degree: usize,
+    pub(crate) pos: Vec<[f64; 2]>,
+    pub(crate) normal: Vec<[f64; 2]>,
+    pub(crate) s: Vec<f64>,
+    pub(crate) r: Vec<f64>,
+    pub(crate) first: Vec<u32>,
+    /// `p + 1` basis values per pixel, pixel after pixel.
+    pub(crate) basis: Vec<f64>,
+    /// Their second derivatives along the parameter, 1/px^2, laid out
+    /// alike: made by the first [`Band::bend_to`], empty until then.
+    basis_d2: Vec<f64>,
+    /// The reference's curvature at each pixel's foot, 1/px, kept by the
+    /// first [`Band::bend_to`] (`curvature` is then the displaced
+    /// curve's); empty until then.
+    reference_curvature: Vec<f64>,
+    /// `gamma(r / R)`.
+    pub(crate) gamma: Vec<f64>,
+    /// `gamma'(r / R) / R`, the derivative of the profile with respect to `r`.
+    pub(crate) dgamma: Vec<f64>,
+    /// The weight each pixel counts with: [`Band::full_weights`], or 0 out
+    /// of the window (module docs).
+    pub(crate) weight: Vec<f64>,
+    /// `1 / (1 - kappa r)` (see the module docs), times any robust factor.
+    pub(crate) full_weight: Vec<f64>,
+    /// Signed curvature of the curve at the pixel's closest point, 1/px.
+    pub(crate) curvature: Vec<f64>,
+}
+
+impl Band {
+    /// The band of half-width `half_width` (pixels) around `curve`, for the
+    /// displacement basis `basis` (whose parameter is the curve's) and the
+    /// virtual `profile` (a [`Profile`] or a [`crate::virtual_image::Kind`]
+    /// for the paper's), in an image of `width x height` pixels; all pixels,
+    /// exact coordinates, no margin ([`BandParams::new`]).
+    ///
+    /// Errors: those of [`Band::new`].
+    pub fn build(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        profile: impl Into<Profile>,
+        width: usize,
+        height: usize,
+    ) -> Result<Band> {
+        let params = BandParams::new(half_width, profile, width, height);
+        Band::new(curve, basis, &params)
+    }
+
+    /// [`Band::build`] with a margin (see the [module docs](self)) and the
+    /// coordinates `coords`: [`Band::new`] with those fields of
+    /// [`BandParams`] set.
+    ///
+    /// Errors: those of [`Band::new`].
+    #[allow(clippy::too_many_arguments)] // the callers' form; see `Band::new`
+    pub fn build_windowed(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        margin: f64,
+        profile: impl Into<Profile>,
+        width: usize,
+        height: usize,
+        coords: Coords,
+    ) -> Result<Band> {
+        let params = BandParams {
+            margin,
+            coords,
+            ..BandParams::new(half_width, profile, width, height)
+        };
+        Band::new(curve, basis, &params)
+    }
+
+    /// [`Band::build`], keeping one pixel in `thin` ([`BandParams::thin`])
+    /// with the coordinates `coords`: [`Band::new`] with those fields of
+    /// [`BandParams`] set.
+    ///
+    /// Errors: those of [`Band::new`].
+    #[allow(clippy::too_many_arguments)] // the callers' form; see `Band::new`
+    pub fn build_with(
+        curve: &SplineCurve,
+        basis: &Basis,
+        half_width: f64,
+        profile: impl Into<Profile>,
+        width: usize,
+        height: usize,
+        thin: usize,
+        coords: Coords,
+    ) -> Result<Band> {
+        let params = BandParams {
+            thin,
+            coords,
+            ..BandParams::new(half_width, profile, width, height)
+        };
+        Band::new(curve, basis, &params)
+    }
+
+    /// The band `params` describes around `curve`, for the displacement
+    /// basis `basis` (whose parameter is the curve's), with scratch grids
+    /// from a pool shared by the process (see [`BandScratch`]).
+    ///
+    /// Errors: [`crate::Error::InvalidParameter`] for a half-width under
+    /// 0.5 px, a negative or non-finite margin, or a basis whose length
+    /// differs from the curve's; [`crate::Error::CurveOutsideImage`] when
+    /// the curve leaves the image; [`crate::Error::BandOutsideImage`] when
+    /// the band (out to `half_width + margin`) does (interpolation needs
+    /// the band inside the pixel centres' hull `[0, width-1] x [0,
+    /// height-1]`); with [`Coords::Levelset`], those of
+    /// [`levelset::LevelsetCoords::build`].
+    pub fn new(curve: &SplineCurve, basis: &Basis, params: &BandParams) -> Result<Band> {
+        let mut scratch = BandScratch::from_pool();
+        let band = Band::new_in(curve, basis, params, &mut scratch);
+        scratch.return_to_pool();
+        band
+    }
+
+    /// Number of pixels in the band.
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// Whether the band holds no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+
+    /// Half-width `R`, pixels (of the window, for a band with a margin).
+    pub fn half_width(&self) -> f64 {
+        self.half_width
+    }
+
+    /// The margin beyond the half-width, pixels (0 unless built with one,
+    /// [`BandParams::margin`]).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// The profile of the virtual image.
+    pub fn profile(&self) -> Profile {
+        self.profile
+    }
+
+    /// `(gamma, d gamma / d r)` of the band's profile at pixel `i` for the
+    /// curve displaced by `u` pixels along its normal: at `r - u`, with the
+    /// pixel's normal and curvature (the reference's, or the one
+    /// [`Band::bend_to`] set; the pushed profile, see `fit::correlation`).
+    /// At `u = 0` on the reference's curvature, the values the band holds
+    /// (the same call, made once when the band was built).
+    #[inline]
+    pub fn profile_at(&self, i: usize, u: f64) -> (f64, f64) {
+        if u == 0.0 && self.reference_curvature.is_empty() {
+            return (self.gamma[i], self.dgamma[i]);
+        }
+        self.profile.eval(
+            self.r[i] - u,
+            self.half_width,
+            self.normal[i],
+            self.curvature[i],
+        )
+    }
+
+    /// `U` at pixel `i` for the displacement `lambda` (coefficients in
+    /// `basis`, the band's), pixels.
+    #[inline]
+    pub(crate) fn displacement_at(&self, basis: &Basis, i: usize, lambda: &[f64]) -> f64 {
+        let p = self.degree;
+        displacement(basis, self.first[i], &self.basis[i * (p + 1)..], lambda)
+    }
+
+    /// Degree of the displacement basis.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// Pixel centres `[x, y]` of the band.
+    pub fn positions(&self) -> &[[f64; 2]] {
+        &self.pos
+    }
+
+    /// Curvilinear abscissa (reference curve parameter) of each pixel, pixels.
+    pub fn s(&self) -> &[f64] {
+        &self.s
+    }
+
+    /// Signed distance of each pixel to the reference curve, pixels.
+    pub fn r(&self) -> &[f64] {
+        &self.r
+    }
+}
+
+/// `sum_k lambda[first + k] values[k]` over the `p + 1` functions of
+/// `basis` from `first` (a pixel's `U` from its basis values, or `U''`
+/// from their second derivatives).
+#[inline]
+fn displacement(basis: &Basis, first: u32, values: &[f64], lambda: &[f64]) -> f64 {
+    let first = first as usize;
+    values[..=basis.degree()]
+        .iter()
+        .enumerate()
+        .map(|(k, v)| lambda[basis.index(first, k)] * v)
+        .sum()
+}
