@@ -18,8 +18,9 @@ use pyo3::types::{PyDict, PyTuple};
 use vicurve::fit::grow::GrowConfig;
 use vicurve::fit::{FitConfig, Outcome, Stage};
 use vicurve::interp::Sampler;
+use vicurve::render::Truth;
 use vicurve::spline::Basis;
-use vicurve::truth::{Kind, Truth};
+use vicurve::truth::Kind;
 
 /// A non-negative integer argument as `usize`.
 fn count(name: &str, v: i64) -> PyResult<usize> {

@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig};
+use vicurve::render::Truth;
 use vicurve::render::{presets, render};
-use vicurve::truth::{evaluate, Shape, Truth};
+use vicurve::truth::{evaluate, Shape};
 
 /// Synthesise a star, measure it from a circle, report the accuracy.
 #[derive(clap::Args)]

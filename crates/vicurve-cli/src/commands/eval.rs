@@ -4,7 +4,8 @@ use crate::failure::Failure;
 use crate::output::write_json;
 use serde::Serialize;
 use std::path::PathBuf;
-use vicurve::truth::{evaluate, ErrorStats, Truth};
+use vicurve::render::Truth;
+use vicurve::truth::{evaluate, ErrorStats};
 
 /// Compare measured points with the exact curve.
 #[derive(clap::Args)]

@@ -6,9 +6,9 @@
 
 use super::{left_image, polarity_sign, Accumulator, Correlation, Moments, Step, StepFailure};
 use crate::band::Band;
-use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::spline::Basis;
+use crate::virtual_image::Polarity;
 use rayon::prelude::*;
 
 /// What a pixel pass reads besides its chunk.

@@ -72,11 +72,11 @@ pub(crate) use tilt::Measured as MeasuredTilt;
 
 use crate::band::Band;
 use crate::error::{Error, Result};
-use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
 use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
+use crate::virtual_image::Polarity;
 use crate::virtual_image::Profile;
 use levels::LevelModel;
 use rayon::prelude::*;
@@ -987,7 +987,7 @@ mod tests {
                 profile,
                 200,
                 200,
-                crate::fit::Coords::Exact,
+                crate::band::Coords::Exact,
             )
             .unwrap();
             let mut corr = Correlation::prepare(band, basis, &sampler, levels, None).unwrap();

@@ -12,11 +12,11 @@ use super::{left_image, polarity_sign, Correlation, Moments, Step, StepFailure};
 use crate::band::Band;
 use crate::correlation::levels::{features, LevelBasis};
 use crate::error::{Error, Result};
-use crate::fit::Polarity;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
 use crate::solver::{BandCholesky, DenseCholesky};
 use crate::spline::Basis;
+use crate::virtual_image::Polarity;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 

@@ -3,7 +3,7 @@
 //! [`render`] paints a [`Shape`] as a silhouette (a region of one gray level
 //! on a background) or a contour (a thin line), then optionally blurs,
 //! adds noise and quantises. The truth written next to the image is
-//! [`crate::truth::Truth::from_spec`].
+//! [`Truth::from_spec`].
 //!
 //! Two painting methods:
 //! - [`Method::Coverage`]: each pixel gets the exact fraction of its area
@@ -20,6 +20,9 @@ pub mod presets;
 pub mod profile;
 pub mod shapes;
 pub mod specimen;
+mod truth_file;
+
+pub use truth_file::Truth;
 
 use serde::{Deserialize, Serialize};
 

@@ -22,7 +22,10 @@
 //! the curvature shift of a blurred one.
 
 pub mod pixel_edge;
+mod polarity;
 mod psi;
+
+pub use polarity::Polarity;
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI};

@@ -5,8 +5,9 @@
 use std::f64::consts::{PI, TAU};
 
 use proptest::prelude::*;
+use vicurve::render::Truth;
 use vicurve::render::{Kind, Method, RenderSpec};
-use vicurve::truth::{evaluate, Shape, Truth};
+use vicurve::truth::{evaluate, Shape};
 use vicurve::Error;
 
 /// Independent parametrisation of each shape (written from the

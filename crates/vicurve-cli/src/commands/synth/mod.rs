@@ -5,8 +5,9 @@ mod necking;
 pub use crate::args::synth::Args;
 use crate::args::synth::{check_bits, numbers, parse_size, ShapeName, DEFAULT_LEVELS};
 use crate::failure::Failure;
+use vicurve::render::Truth;
 use vicurve::render::{presets, render, Method, RenderSpec};
-use vicurve::truth::{Shape, Truth};
+use vicurve::truth::Shape;
 use vicurve::virtual_image::Kind;
 
 pub fn run(args: Args) -> Result<(), Failure> {
