@@ -369,7 +369,7 @@ pub(crate) struct Correlation {
     /// second step). A property of the system (how far `M0` is from the
     /// residual's own curvature), which stays as long as `M0` and the
     /// gradient do: a kept band's next frames may rely on it
-    /// (`fit::error_left`).
+    /// (`fit::run::error_left`).
     contraction: Option<f64>,
 }
 

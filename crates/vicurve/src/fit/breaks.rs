@@ -48,7 +48,7 @@ use crate::error::{Error, Result};
 use crate::spline::{Basis, Break, MAX_DEGREE};
 use rayon::prelude::*;
 
-/// Degree of the reference curves built here (as in `displaced`).
+/// Degree of the reference curves built here (as in `reference::next_reference`).
 const REFERENCE_DEGREE: usize = 3;
 /// Control-point spacing of the initial reference with breaks, pixels.
 const INITIAL_SPACING: f64 = 2.0;

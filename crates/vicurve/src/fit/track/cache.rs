@@ -18,7 +18,7 @@
 //! band). A frame on a kept band starts from the kept displacement moved
 //! on as the curve moved over the last frame (a steady motion then needs
 //! fewer iterations, and stops after two steps when the band's earlier
-//! frames showed a fast contraction: `fit::error_left`), with the
+//! frames showed a fast contraction: `fit::run::error_left`), with the
 //! curvature of that curve in the profile (`Band::bend_to`). The light's
 //! tilt measured on the band's first frame, and the blur it fitted, serve
 //! its later ones (a sequence's light and focus change slowly; the next
