@@ -48,10 +48,7 @@ impl Pass<'_> {
             }
             let first = band.first[i] as usize;
             let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-            let mut u = 0.0;
-            for (k, v) in vals.iter().enumerate() {
-                u += lambda[basis.index(first, k)] * v;
-            }
+            let u = band.displacement_at(basis, i, lambda);
             let mut dg = band.dgamma[i];
             let (f, gamma) = match pushed {
                 Some(values) => {

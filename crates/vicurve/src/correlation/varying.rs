@@ -353,7 +353,6 @@ impl Varying {
             lambda,
             pushed,
         } = ctx;
-        let p = basis.degree();
         let lb = &self.levels;
         let theta = &self.theta;
         let have_theta = self.have_theta;
@@ -388,12 +387,7 @@ impl Varying {
                         // Out of the window (or rejected): counts for nothing.
                         continue;
                     }
-                    let first = band.first[i] as usize;
-                    let vals = &band.basis[i * (p + 1)..(i + 1) * (p + 1)];
-                    let mut u = 0.0;
-                    for (k, v) in vals.iter().enumerate() {
-                        u += lambda[basis.index(first, k)] * v;
-                    }
+                    let u = band.displacement_at(basis, i, lambda);
                     let mut scale = 1.0;
                     let (f, gamma) = match pushed {
                         Some(values) => {
