@@ -11,8 +11,9 @@ pub struct StartArgs {
     /// `polyline:FILE.csv` (rows `x,y`, header allowed), in pixels (x =
     /// column, y = row, pixel centres at integers). It must cross or lie near
     /// the curve to measure. Without it (silhouettes), the main silhouette is
-    /// found automatically: Otsu threshold, the largest region seen whole
-    /// (else the longest edge crossing the image), its traced boundary.
+    /// found automatically: Otsu threshold, the region with the strongest
+    /// edge (contrast times length; objects cut by the border count their
+    /// visible edge), its traced boundary.
     #[arg(long)]
     pub init: Option<String>,
     /// Automatic start: the region containing this point `X,Y` (pixels);

@@ -6,10 +6,13 @@
 //!    ([`threshold::otsu`]).
 //! 2. Its 4-connected regions on either side of the threshold are labelled
 //!    ([`region::label`]). The chosen region is the one containing the
-//!    picked point when there is one; otherwise the largest region that does
-//!    not touch the rectangle's border (an object seen whole), and failing
-//!    that the region touching the border whose boundary runs longest away
-//!    from it (an edge crossing the image).
+//!    picked point when there is one; otherwise the region whose edge is
+//!    strongest: the sum of the image gradient along the part of its
+//!    boundary a fit can measure (the whole boundary of an object seen
+//!    whole; for a region cut by the rectangle's border, the longest
+//!    stretch away from it). Contrast times length: a bright speck loses to
+//!    the long edge of a dark object cut by the border, a faint texture
+//!    blob to a sharp edge.
 //! 3. Its outer boundary is traced pixel by pixel ([`boundary::trace`]),
 //!    smoothed by a moving average and returned as a closed polyline; for a
 //!    region touching the border, the longest stretch of boundary at least
@@ -124,7 +127,7 @@ pub fn find_silhouette(image: &Image, config: &StartConfig) -> Result<AutoStart>
             }
             r
         }
-        None => main_region(&regions, &labels, rect)?,
+        None => main_region(&regions, &labels, &values, rect)?,
     };
     let chain = boundary::trace(&labels, w, h, chosen.label, chosen.first);
     let to_image = |&(i, j): &(usize, usize)| [(rect.x0 + i) as f64, (rect.y0 + j) as f64];
@@ -194,27 +197,54 @@ fn search_rect(image: &Image, roi: Option<[f64; 4]>) -> Result<Rect> {
     Ok(r)
 }
 
-/// The main silhouette (module docs).
+/// The main silhouette (module docs): of the regions of at least
+/// `MIN_REGION_PIXELS` pixels, the one whose measurable edge is strongest,
+/// scored by [`edge_score`]. A region seen whole offers its whole boundary;
+/// one cut by the rectangle's border its longest stretch away from the
+/// border (`free_run`), so that an object cut by the border competes on the
+/// edge a fit can measure and a small bright speck never outweighs the long
+/// edge of a real object.
 fn main_region<'a>(
     regions: &'a [region::Region],
     labels: &[u32],
+    values: &[f64],
     rect: Rect,
 ) -> Result<&'a region::Region> {
-    let big = || regions.iter().filter(|r| r.pixels >= MIN_REGION_PIXELS);
-    if let Some(r) = big().filter(|r| !r.touches_border).max_by_key(|r| r.pixels) {
-        return Ok(r);
-    }
-    big()
-        .map(|r| {
-            let chain = boundary::trace(labels, rect.width(), rect.height(), r.label, r.first);
-            (free_run(&chain, rect).len(), r)
+    let (w, h) = (rect.width(), rect.height());
+    regions
+        .iter()
+        .filter(|r| r.pixels >= MIN_REGION_PIXELS)
+        .filter_map(|r| {
+            let chain = boundary::trace(labels, w, h, r.label, r.first);
+            let edge = if r.touches_border {
+                free_run(&chain, rect)
+            } else {
+                chain
+            };
+            (edge.len() >= MIN_BOUNDARY).then(|| (edge_score(&edge, values, w, h), r))
         })
-        .filter(|(n, _)| *n >= MIN_BOUNDARY)
-        .max_by_key(|(n, _)| *n)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, r)| r)
         .ok_or_else(|| Error::NoSilhouette {
             reason: "no region stands out from the background (thresholded at Otsu's level)".into(),
         })
+}
+
+/// How much edge a boundary run offers a fit: its length (pixels) times the
+/// mean gradient magnitude of the smoothed `values` (`w x h`, gray levels
+/// per pixel, central differences) on its pixels, i.e. about the contrast
+/// integrated along the edge. Both factors matter: a faint texture blob can
+/// be large, a speck can be sharp; a real object's edge is long and sharp.
+fn edge_score(run: &[(usize, usize)], values: &[f64], w: usize, h: usize) -> f64 {
+    let at = |i: usize, j: usize| values[j * w + i];
+    let gradient = |&(i, j): &(usize, usize)| {
+        let (il, ir) = (i.saturating_sub(1), (i + 1).min(w - 1));
+        let (ju, jd) = (j.saturating_sub(1), (j + 1).min(h - 1));
+        let gx = (at(ir, j) - at(il, j)) / (ir - il).max(1) as f64;
+        let gy = (at(i, jd) - at(i, ju)) / (jd - ju).max(1) as f64;
+        gx.hypot(gy)
+    };
+    run.iter().map(gradient).sum()
 }
 
 /// The longest cyclic stretch of `chain` whose pixels are all at least

@@ -336,6 +336,65 @@ fn disc_cut_by_the_image_border() {
     );
 }
 
+/// A dark object on textured cloth, cut by the image border, with two
+/// specks of about 150 pixels seen whole: a dark one on the cloth and a
+/// bright one on the object. Both specks are regions that do not touch the
+/// border; the object's edge is long and as sharp. The automatic start must
+/// take the object's edge (its score, contrast times length, is some ten
+/// times a speck's), and the measurement from it must find that edge.
+#[test]
+fn dark_object_on_cloth_beats_the_specks() {
+    let shape = Shape::Circle {
+        cx: 40.3,
+        cy: 150.6,
+        r: 110.0,
+    };
+    let mut image = paint(&Scene {
+        width: 300,
+        height: 300,
+        shape: shape.clone(),
+        texture_inside: 0.03,
+        texture_outside: 0.12,
+        texture_length: 2.0,
+        blur: 1.0,
+        noise: 0.01,
+        seed: 51,
+    });
+    // The object dark, the cloth bright; then the specks (radius 7 px).
+    let speck = |d: &mut [f64], cx: f64, cy: f64, v: f64| {
+        for j in 0..300 {
+            for i in 0..300 {
+                if (i as f64 - cx).hypot(j as f64 - cy) < 7.0 {
+                    d[j * 300 + i] = v;
+                }
+            }
+        }
+    };
+    let d = image.data_mut();
+    d.iter_mut().for_each(|v| *v = 1.0 - *v);
+    speck(d, 240.0, 60.0, 1.0 - BRIGHT);
+    speck(d, 60.0, 150.0, 1.0 - DARK);
+    let start = auto_start(&image);
+    assert!(!start.closed, "a speck was taken: {start:?}");
+    let InitialCurve::Polyline { points, .. } = &start.curve else {
+        panic!("{:?}", start.curve)
+    };
+    let on_edge = points
+        .iter()
+        .all(|p| ((p[0] - 40.3).hypot(p[1] - 150.6) - 110.0).abs() < 2.0);
+    assert!(on_edge && points.len() > 200, "{} points", points.len());
+    let m = measure(&image, &start.curve, &FitConfig::default()).unwrap();
+    assert_eq!(m.outcome, Outcome::Converged);
+    let e = stats(&m, &shape);
+    show("dark object on cloth, automatic start", &m, &e);
+    // The cloth's texture (12 % of the contrast) dominates the error, as in
+    // `textured_star`.
+    assert!(
+        e.bias.abs() <= 0.08 && e.scatter <= 0.3 && e.max_abs <= 1.0,
+        "{e:?}"
+    );
+}
+
 /// A whole disc whose edge passes `gap` px from the left border. The coarse
 /// stages' bands do not fit and are skipped (reported); the edge's blur
 /// cannot be estimated on its 8-px band, so the result is the 2-px band's
