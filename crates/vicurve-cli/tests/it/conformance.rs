@@ -220,10 +220,13 @@ fn failed_criteria(r: &HashMap<String, String>) -> Vec<String> {
         failed.push(format!("{} {}", r["outcome"], r["message"]));
     }
     let limit = bias_limit(num("blur"), num("noise_pct"));
-    if !(num("bias").abs() <= limit) {
+    // Written so that NaN (no curve) fails.
+    let bias_ok = num("bias").abs() <= limit;
+    if !bias_ok {
         failed.push(format!("|bias| {:.2e} > {limit:.0e}", num("bias").abs()));
     }
-    if !(num("max_abs") <= 8.0 * num("scatter")) {
+    let max_ok = num("max_abs") <= 8.0 * num("scatter");
+    if !max_ok {
         failed.push(format!("max {:.2e} > 8 x scatter", num("max_abs")));
     }
     let ratio = num("scatter") / num("sigma_rms");

@@ -365,7 +365,7 @@ fn ci_sweep() -> Vec<Case> {
                 let pair = (k * 5 + round) % 16;
                 let (blur, noise) = (BLURS[pair / 4], NOISES[pair % 4]);
                 let bits = if k % 4 == 3 { 16 } else { 8 };
-                let image = image_case(shape, blur, noise, bits, k % 2 == 0);
+                let image = image_case(shape, blur, noise, bits, k.is_multiple_of(2));
                 out.push(case(&image, start, None));
                 k += 1;
             }

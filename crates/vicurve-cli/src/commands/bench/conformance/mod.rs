@@ -14,6 +14,7 @@ use crate::failure::Failure;
 pub use cases::Set;
 use cases::{filtered, Case};
 use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
 use score::Row;
 use std::path::PathBuf;
 use vicurve::Image;
@@ -78,32 +79,57 @@ fn command_line(args: &ConformanceArgs) -> String {
     c
 }
 
-/// Every case in order, one image rendered for all the cases on it.
+/// Every case, in order: the images are measured in parallel (rayon's
+/// threads), each rendered once for all the cases on it, which run one
+/// after the other.
 fn run_all(cases: &[Case]) -> Result<Vec<Row>, Failure> {
     let bar = ProgressBar::new(cases.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} (ETA {eta})")
             .map_err(|e| e.to_string())?,
     );
-    let mut rows = Vec::with_capacity(cases.len());
-    let mut image: Option<(String, Result<Image, String>)> = None;
-    for case in cases {
-        bar.set_message(case.id.clone());
-        if image.as_ref().map(|i| &i.0) != Some(&case.image.id) {
-            let img = vicurve::render::render(&case.image.spec).map_err(|e| e.to_string());
-            image = Some((case.image.id.clone(), img));
-        }
-        let ran = match image.as_ref().map(|i| &i.1) {
-            Some(Ok(img)) => run::run_case(case, img),
-            Some(Err(e)) => run::Ran::Failed {
-                message: format!("rendering: {e}"),
-                seconds: 0.0,
-            },
-            None => unreachable!("an image was just rendered"),
-        };
-        rows.push(score::score(case, &ran));
-        bar.inc(1);
-    }
+    let groups = by_image(cases);
+    let rows: Vec<Vec<Row>> = groups
+        .par_iter()
+        .map(|group| {
+            bar.set_message(group[0].image.id.clone());
+            let rows = run_image(group);
+            bar.inc(group.len() as u64);
+            rows
+        })
+        .collect();
     bar.finish_and_clear();
-    Ok(rows)
+    Ok(rows.into_iter().flatten().collect())
+}
+
+/// Consecutive cases on the same image.
+fn by_image(cases: &[Case]) -> Vec<&[Case]> {
+    let mut groups = Vec::new();
+    let mut start = 0;
+    for i in 1..=cases.len() {
+        if i == cases.len() || cases[i].image.id != cases[start].image.id {
+            groups.push(&cases[start..i]);
+            start = i;
+        }
+    }
+    groups
+}
+
+/// Render the image of `group` and run each of its cases on it.
+fn run_image(group: &[Case]) -> Vec<Row> {
+    let image: Result<Image, String> =
+        vicurve::render::render(&group[0].image.spec).map_err(|e| e.to_string());
+    group
+        .iter()
+        .map(|case| {
+            let ran = match &image {
+                Ok(img) => run::run_case(case, img),
+                Err(e) => run::Ran::Failed {
+                    message: format!("rendering: {e}"),
+                    seconds: 0.0,
+                },
+            };
+            score::score(case, &ran)
+        })
+        .collect()
 }

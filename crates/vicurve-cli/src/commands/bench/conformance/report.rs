@@ -96,7 +96,8 @@ fn conventions(s: &mut String) {
          closed curves, the fraction of 360 sectors about the centre with a sample within \
          1 px of the curve; open curves, the x range of such samples over the image width, and \
          the border gap = the larger distance from an end to the outermost pixel centre. Time: \
-         start search and fit, one thread.\n\
+         wall clock of the start search and the fit (images run in parallel on the \
+         machine's cores, so times include contention).\n\
          - **Criteria** (one CSV column each): `bias_ok` |bias| <= {BIAS_EASY:.0e} px for blur \
          <= 2 px and noise <= 2 %, <= {BIAS_HARD:.0e} px elsewhere; `max_ok` max <= \
          {MAX_OVER_SCATTER} x scatter; `sigma_ok` scatter / sigma in [{}, {}]; `converged_ok` \
