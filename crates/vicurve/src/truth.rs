@@ -8,6 +8,9 @@
 //! - closed shapes run counterclockwise *as seen on screen* for `s` in
 //!   `[0, 2π)`, so the unit normal `n = (-t_y, t_x)` of the unit tangent `t`
 //!   points outward;
+//! - a [`Shape::Polygon`] has corners: its distance is computed edge by
+//!   edge, exactly, and at a vertex its normal is that of the edge starting
+//!   there;
 //! - the open [`Shape::Sine`] is travelled in `+x` (its parameter is `x`), so
 //!   `n` points to `+y` (down on screen).
 //!
@@ -20,6 +23,7 @@
 //! concave parts of a star are handled).
 
 mod geometry;
+mod polygon;
 pub mod specimen;
 
 use std::f64::consts::PI;
@@ -91,6 +95,25 @@ pub enum Shape {
         /// Phase, rad.
         phase: f64,
     },
+    /// Regular polygon of centre `(cx, cy)` and circumradius `r > 0`, with
+    /// `sides >= 3` straight edges: vertex `k` at the polar angle
+    /// `angle + 2πk / sides`, i.e. `(cx + r cos θ_k, cy - r sin θ_k)`,
+    /// counterclockwise on screen; `s` in `[2πk/n, 2π(k+1)/n]` runs linearly
+    /// along the edge from vertex `k` to `k + 1`. Its corners make it the
+    /// test of `FitConfig::breaks`; a line (contour) cannot be drawn along it
+    /// by exact coverage (its smallest radius of curvature is 0).
+    Polygon {
+        /// Centre, x (column), px.
+        cx: f64,
+        /// Centre, y (row), px.
+        cy: f64,
+        /// Circumradius (centre to vertex), px.
+        r: f64,
+        /// Number of edges, 3 to 10000.
+        sides: u32,
+        /// Polar angle of vertex 0 from `+x`, counterclockwise on screen, rad.
+        angle: f64,
+    },
     /// Open curve `y = y0 + amplitude sin(2π x / wavelength + phase)` for `x`
     /// in `[x_min, x_max]`, travelled in `+x` (parameter `s = x`).
     ///
@@ -119,7 +142,8 @@ impl Shape {
     /// Check the parameters: all finite, radii, semi-axes, wavelength `> 0`,
     /// `|amplitude| < 1` and `1 <= lobes <= 10000` for a star (which makes it
     /// star-shaped about its centre, with a smooth boundary of finite
-    /// curvature), `x_min < x_max` for a sine.
+    /// curvature), `3 <= sides <= 10000` for a polygon, `x_min < x_max` for a
+    /// sine.
     ///
     /// Errors: [`Error::InvalidParameter`] naming the parameter.
     pub fn validate(&self) -> Result<()> {
@@ -186,6 +210,25 @@ impl Shape {
                 }
                 Ok(())
             }
+            Shape::Polygon {
+                cx,
+                cy,
+                r,
+                sides,
+                angle,
+            } => {
+                finite("cx", cx)?;
+                finite("cy", cy)?;
+                positive("r", r)?;
+                finite("angle", angle)?;
+                if !(3..=10_000).contains(&sides) {
+                    return Err(Error::invalid(
+                        "sides",
+                        format!("{sides}: a polygon needs 3 to 10000 sides"),
+                    ));
+                }
+                Ok(())
+            }
             Shape::Sine {
                 y0,
                 amplitude,
@@ -212,6 +255,12 @@ impl Shape {
         }
     }
 
+    /// The corners of the curve, px: a polygon's vertices (counterclockwise
+    /// on screen, vertex 0 first), none for the smooth shapes.
+    pub fn corners(&self) -> Vec<[f64; 2]> {
+        polygon::vertices(self)
+    }
+
     /// Whether the curve is closed (every shape but [`Shape::Sine`]).
     pub fn is_closed(&self) -> bool {
         !matches!(self, Shape::Sine { .. })
@@ -226,6 +275,9 @@ impl Shape {
     /// point or an invalid shape.
     pub fn signed_distance(&self, x: f64, y: f64) -> f64 {
         let q = [x, y];
+        if let Shape::Polygon { sides, .. } = *self {
+            return polygon::signed_distance(self, sides, q);
+        }
         let s = self.closest_param(q);
         let e = self.eval(s);
         let d = [x - e.p[0], y - e.p[1]];
@@ -241,9 +293,14 @@ impl Shape {
     /// The point of the curve closest to `(x, y)` and the curve's unit
     /// normal `n` there (outward for closed shapes, `+y`-ish for the sine),
     /// px. When several points are equally close (the centre of a circle),
-    /// one of them. Same accuracy and preconditions as
-    /// [`Shape::signed_distance`].
+    /// one of them. For a polygon whose closest point is a vertex, the unit
+    /// vector from it to `(x, y)` (so that the point is always the closest
+    /// point plus the signed distance times `n`). Same accuracy and
+    /// preconditions as [`Shape::signed_distance`].
     pub fn closest_point(&self, x: f64, y: f64) -> ([f64; 2], [f64; 2]) {
+        if let Shape::Polygon { sides, .. } = *self {
+            return polygon::closest_point(self, sides, [x, y]);
+        }
         let e = self.eval(self.closest_param([x, y]));
         (e.p, e.normal())
     }
@@ -277,8 +334,8 @@ impl Shape {
     }
 
     /// Area enclosed by a closed shape, px² (exact closed form:
-    /// `π r²`, `π a b`, `π r0² (1 + amplitude²/2)` for a star); `None` for
-    /// the sine.
+    /// `π r²`, `π a b`, `π r0² (1 + amplitude²/2)` for a star,
+    /// `n r² sin(2π/n) / 2` for a polygon); `None` for the sine.
     pub fn area(&self) -> Option<f64> {
         match *self {
             Shape::Circle { r, .. } => Some(PI * r * r),
@@ -286,12 +343,17 @@ impl Shape {
             Shape::Star { r0, amplitude, .. } => {
                 Some(PI * r0 * r0 * (1.0 + 0.5 * amplitude * amplitude))
             }
+            Shape::Polygon { r, sides, .. } => {
+                let n = f64::from(sides);
+                Some(0.5 * n * r * r * (2.0 * PI / n).sin())
+            }
             Shape::Sine { .. } => None,
         }
     }
 
     /// Smallest absolute radius of curvature along the curve, px (for the
-    /// sine, along the infinite curve; `f64::INFINITY` for a straight line).
+    /// sine, along the infinite curve; `f64::INFINITY` for a straight line;
+    /// 0 for a polygon, whose corners are sharp).
     /// Closed forms except for the star (dense sampling refined by golden
     /// section, relative accuracy about `1e-9`). A line drawn along the curve
     /// must be narrower than twice this.
@@ -308,6 +370,7 @@ impl Shape {
                 1.0 / (amplitude.abs() * w * w)
             }
             Shape::Star { .. } => geometry::star_min_curvature_radius(self),
+            Shape::Polygon { .. } => 0.0,
         }
     }
 }

@@ -26,7 +26,7 @@ const MAX_VERTICES: usize = 100_000_000;
 /// coordinates; see [`super::coverage::polygon_coverage`]. The spec must be
 /// valid.
 ///
-/// - Silhouette of a closed shape: its boundary.
+/// - Silhouette of a closed shape: its boundary (a polygon's own vertices).
 /// - Silhouette of a sine: the part above the curve (smaller `y`), closed
 ///   outside the image.
 /// - Contour of a closed shape: the outer offset curve (`+h n`) and the inner
@@ -63,6 +63,7 @@ pub fn region_rings(spec: &RenderSpec) -> Result<Vec<Vec<[f64; 2]>>> {
                 }
             }
         }
+        (Shape::Polygon { .. }, Kind::Silhouette) => Ok(vec![shape.corners()]),
         (_, Kind::Silhouette) => {
             let mut ring = Vec::new();
             offset_curve(shape, 0.0, 0.0, std::f64::consts::TAU, false, &mut ring)?;

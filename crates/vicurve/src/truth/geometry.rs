@@ -126,6 +126,7 @@ impl Shape {
                     ],
                 }
             }
+            Shape::Polygon { sides, .. } => super::polygon::eval(self, sides, s),
             Shape::Sine {
                 y0,
                 amplitude,
@@ -168,6 +169,9 @@ impl Shape {
                 let ratio = a * k / (1.0 - a);
                 TURN / (1.0 + 2.0 * ratio * ratio + ratio * k)
             }
+            // Straight edges: any step integrates the (constant) speed
+            // exactly; a quarter edge keeps the panels short.
+            Shape::Polygon { sides, .. } => 0.25 * TAU / f64::from(sides),
             Shape::Sine {
                 amplitude,
                 wavelength,
@@ -224,6 +228,7 @@ impl Shape {
                 let (x, y) = (q[0] - cx, -(q[1] - cy));
                 self.search_polar(q, x.hypot(y), y.atan2(x), |phi| phi, step)
             }
+            Shape::Polygon { sides, .. } => super::polygon::closest_param(self, sides, q),
             Shape::Sine { .. } => {
                 let s_r = q[0];
                 let d = (q[1] - self.eval(s_r).p[1]).abs();

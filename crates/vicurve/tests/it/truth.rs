@@ -40,6 +40,14 @@ fn param_point(shape: &Shape, s: f64) -> [f64; 2] {
             let r = r0 * (1.0 + amplitude * (lobes as f64 * s + phase).cos());
             [cx + r * s.cos(), cy - r * s.sin()]
         }
+        Shape::Polygon { sides, .. } => {
+            // Linear between the vertices, edge k over [2πk/n, 2π(k+1)/n].
+            let h = TAU / sides as f64;
+            let k = (s / h).floor();
+            let t = s / h - k;
+            let (a, b) = (polygon_vertex(shape, k), polygon_vertex(shape, k + 1.0));
+            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+        }
         Shape::Sine {
             y0,
             amplitude,
@@ -48,6 +56,22 @@ fn param_point(shape: &Shape, s: f64) -> [f64; 2] {
             ..
         } => [s, y0 + amplitude * (TAU * s / wavelength + phase).sin()],
     }
+}
+
+/// Vertex `k` of a polygon, from its documentation.
+fn polygon_vertex(shape: &Shape, k: f64) -> [f64; 2] {
+    let Shape::Polygon {
+        cx,
+        cy,
+        r,
+        sides,
+        angle,
+    } = *shape
+    else {
+        panic!("not a polygon");
+    };
+    let th = angle + TAU * k / sides as f64;
+    [cx + r * th.cos(), cy - r * th.sin()]
 }
 
 /// Brute-force unsigned distance: `n` samples over `[lo, hi]`, golden
@@ -104,6 +128,20 @@ fn inside(shape: &Shape, q: [f64; 2]) -> bool {
             let th = y.atan2(x);
             x.hypot(y) < r0 * (1.0 + amplitude * (lobes as f64 * th + phase).cos())
         }
+        Shape::Polygon {
+            cx,
+            cy,
+            r,
+            sides,
+            angle,
+        } => {
+            // Inside the inscribed circle of every edge's half-plane: the
+            // polar angle of q relative to the middle of its sector.
+            let (x, y) = (q[0] - cx, -(q[1] - cy));
+            let h = TAU / sides as f64;
+            let rel = (y.atan2(x) - angle).rem_euclid(h) - 0.5 * h;
+            x.hypot(y) * rel.cos() < r * (0.5 * h).cos()
+        }
         Shape::Sine { .. } => q[1] < param_point(shape, q[0])[1],
     }
 }
@@ -145,6 +183,15 @@ fn ellipse() -> Shape {
         angle: 0.6,
     }
 }
+
+/// A pentagon, circumradius 30 px.
+const PENTAGON: Shape = Shape::Polygon {
+    cx: 50.4,
+    cy: 49.7,
+    r: 30.0,
+    sides: 5,
+    angle: 0.3,
+};
 
 fn sine() -> Shape {
     Shape::Sine {
@@ -188,6 +235,13 @@ proptest! {
         let v = t[0].hypot(t[1]);
         let n = [-t[1] / v, t[0] / v];
         check_against_brute(&shape, [p[0] + off * n[0], p[1] + off * n[1]], 0.0, TAU);
+    }
+
+    #[test]
+    fn polygon_matches_brute_force(x in 0.0f64..100.0, y in 0.0f64..100.0) {
+        // Includes the wedges beyond the corners, where the closest point
+        // is a vertex.
+        check_against_brute(&PENTAGON, [x, y], 0.0, TAU);
     }
 
     #[test]
@@ -328,6 +382,60 @@ fn chord_length(shape: &Shape, lo: f64, hi: f64, n: usize) -> f64 {
         prev = p;
     }
     total
+}
+
+#[test]
+fn polygon_corners_lengths_and_area() {
+    let sides = 5.0;
+    let r: f64 = 30.0;
+    let side = 2.0 * r * (PI / sides).sin();
+    assert!((PENTAGON.length() - sides * side).abs() < 1e-10);
+    let area = 0.5 * sides * r * r * (TAU / sides).sin();
+    assert!((PENTAGON.area().unwrap() - area).abs() < 1e-10);
+    assert_eq!(PENTAGON.min_curvature_radius(), 0.0);
+    let corners = PENTAGON.corners();
+    assert_eq!(corners.len(), 5);
+    for (k, c) in corners.iter().enumerate() {
+        let v = polygon_vertex(&PENTAGON, k as f64);
+        assert!((c[0] - v[0]).abs() < 1e-12 && (c[1] - v[1]).abs() < 1e-12);
+        assert!(PENTAGON.signed_distance(c[0], c[1]).abs() < 1e-12);
+    }
+    assert!(STAR.corners().is_empty());
+    // Beyond a vertex along its bisector: distance to the vertex, outside,
+    // the normal pointing away from the centre.
+    let v = corners[2];
+    let q = [
+        v[0] + 4.0 * (v[0] - 50.4) / r,
+        v[1] + 4.0 * (v[1] - 49.7) / r,
+    ];
+    assert!((PENTAGON.signed_distance(q[0], q[1]) - 4.0).abs() < 1e-12);
+    let (p, n) = PENTAGON.closest_point(q[0], q[1]);
+    assert!((p[0] - v[0]).abs() < 1e-9 && (p[1] - v[1]).abs() < 1e-9);
+    assert!((n[0] - (v[0] - 50.4) / r).abs() < 1e-9);
+    // The centre is inside, at the inradius.
+    let inradius = r * (PI / sides).cos();
+    assert!((PENTAGON.signed_distance(50.4, 49.7) + inradius).abs() < 1e-12);
+}
+
+#[test]
+fn polygon_silhouette_sums_to_its_area() {
+    let spec = RenderSpec {
+        width: 100,
+        height: 100,
+        shape: PENTAGON,
+        foreground: 1.0,
+        background: 0.0,
+        ..RenderSpec::default()
+    };
+    let img = vicurve::render::render(&spec).unwrap();
+    let sum: f64 = img.data().iter().sum();
+    assert!((sum - PENTAGON.area().unwrap()).abs() < 1e-9, "{sum}");
+    // A line along it cannot be drawn by coverage (its corners).
+    let line = RenderSpec {
+        kind: Kind::Contour,
+        ..spec
+    };
+    assert!(vicurve::render::render(&line).is_err());
 }
 
 #[test]
@@ -494,6 +602,16 @@ fn validation_names_the_parameter() {
             },
             "x_max",
         ),
+        (
+            Shape::Polygon {
+                cx: 0.0,
+                cy: 0.0,
+                r: 10.0,
+                sides: 2,
+                angle: 0.0,
+            },
+            "sides",
+        ),
     ];
     for (shape, name) in bad {
         match shape.validate() {
@@ -533,6 +651,12 @@ fn truth_json_round_trip() {
         Truth::from_json("{", "x"),
         Err(Error::Parse { .. })
     ));
+    // A polygon written by hand.
+    let s: Shape = serde_json::from_str(
+        r#"{"shape": "polygon", "cx": 1.0, "cy": 2.0, "r": 3.0, "sides": 6, "angle": 0.5}"#,
+    )
+    .unwrap();
+    assert_eq!(s.corners().len(), 6);
     // A shape written by hand.
     let s: Shape =
         serde_json::from_str(r#"{"shape": "circle", "cx": 1.0, "cy": 2.0, "r": 3.0}"#).unwrap();

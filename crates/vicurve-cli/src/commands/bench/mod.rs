@@ -1,8 +1,10 @@
 //! `vicurve bench paper`: the paper's performance study (section 7,
 //! figures 7 to 10) re-run on its own synthetic disc, plus an exact-coverage
 //! study with blur and noise; numbers as CSV, figures as SVG and PNG, and a
-//! report that sets them against the paper's stated figures.
+//! report that sets them against the paper's stated figures; and
+//! `vicurve bench conformance`, the conformance sweep ([`conformance`]).
 
+mod conformance;
 mod paper;
 
 use crate::failure::Failure;
@@ -28,6 +30,10 @@ enum Which {
     /// Re-run the paper's section 7 (figures 7 to 10) and an exact-coverage
     /// study with blur and noise; write CSV, SVG/PNG figures and report.md.
     Paper(PaperArgs),
+    /// The conformance sweep: every shape, start, blur, noise, depth and
+    /// polarity measured against the exact truth and the acceptance
+    /// criteria; write conformance.csv and conformance.md.
+    Conformance(conformance::ConformanceArgs),
 }
 
 /// Arguments of `vicurve bench paper`.
@@ -45,6 +51,7 @@ struct PaperArgs {
 pub fn run(args: Args) -> Result<(), Failure> {
     match args.which {
         Which::Paper(a) => paper(&a),
+        Which::Conformance(a) => conformance::conformance(&a),
     }
 }
 

@@ -1,0 +1,135 @@
+//! `vicurve bench conformance`: the conformance sweep. Every shape, start,
+//! blur, noise level, depth and polarity of the sweep ([`cases`]) is
+//! rendered, started as a user would ([`run`]), measured in-process and
+//! scored against the exact truth and the acceptance criteria ([`score`]);
+//! `conformance.csv` and `conformance.md` ([`report`]) say which cases
+//! fail and why.
+
+mod cases;
+mod report;
+mod run;
+mod score;
+
+use crate::failure::Failure;
+pub use cases::Set;
+use cases::{filtered, Case};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use score::Row;
+use std::path::PathBuf;
+use vicurve::Image;
+
+/// Arguments of `vicurve bench conformance`.
+#[derive(clap::Args)]
+pub struct ConformanceArgs {
+    /// Output directory (created if needed): conformance.csv and
+    /// conformance.md are replaced.
+    #[arg(long)]
+    out: PathBuf,
+    /// `ci`: every shape and start on a rotation of the conditions (a
+    /// minute or two); `full`: the whole sweep (minutes).
+    #[arg(long, value_enum, default_value = "ci")]
+    set: Set,
+    /// Run only the cases whose id contains this text.
+    #[arg(long, value_name = "SUBSTR")]
+    filter: Option<String>,
+}
+
+/// Run the sweep and write its outputs.
+pub fn conformance(args: &ConformanceArgs) -> Result<(), Failure> {
+    let out = &args.out;
+    std::fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let cases = filtered(cases::cases(args.set), args.filter.as_deref());
+    if cases.is_empty() {
+        return Err(Failure::Error("no case matches --filter".into()));
+    }
+    let rows = run_all(&cases)?;
+    write(&out.join("conformance.csv"), &report::csv(&rows))?;
+    write(
+        &out.join("conformance.md"),
+        &report::report(&rows, &command_line(args)),
+    )?;
+    let passed = rows.iter().filter(|r| r.pass).count();
+    println!(
+        "{passed} of {} cases pass; wrote {} (conformance.csv, conformance.md)",
+        rows.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn write(path: &std::path::Path, text: &str) -> Result<(), String> {
+    std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// The command that reproduces the outputs.
+fn command_line(args: &ConformanceArgs) -> String {
+    let set = match args.set {
+        Set::Ci => "ci",
+        Set::Full => "full",
+    };
+    let mut c = format!(
+        "vicurve bench conformance --out {} --set {set}",
+        args.out.display()
+    );
+    if let Some(f) = &args.filter {
+        c.push_str(&format!(" --filter {f}"));
+    }
+    c
+}
+
+/// Every case, in order: the images are measured in parallel (rayon's
+/// threads), each rendered once for all the cases on it, which run one
+/// after the other.
+fn run_all(cases: &[Case]) -> Result<Vec<Row>, Failure> {
+    let bar = ProgressBar::new(cases.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} (ETA {eta})")
+            .map_err(|e| e.to_string())?,
+    );
+    let groups = by_image(cases);
+    let rows: Vec<Vec<Row>> = groups
+        .par_iter()
+        .map(|group| {
+            bar.set_message(group[0].image.id.clone());
+            let rows = run_image(group);
+            bar.inc(group.len() as u64);
+            rows
+        })
+        .collect();
+    bar.finish_and_clear();
+    Ok(rows.into_iter().flatten().collect())
+}
+
+/// Consecutive cases on the same image.
+fn by_image(cases: &[Case]) -> Vec<&[Case]> {
+    let mut groups = Vec::new();
+    let mut start = 0;
+    for i in 1..=cases.len() {
+        if i == cases.len() || cases[i].image.id != cases[start].image.id {
+            groups.push(&cases[start..i]);
+            start = i;
+        }
+    }
+    groups
+}
+
+/// Render the image of `group` and run each of its cases on it.
+fn run_image(group: &[Case]) -> Vec<Row> {
+    let image: Result<Image, String> =
+        vicurve::render::render(&group[0].image.spec).map_err(|e| e.to_string());
+    group
+        .iter()
+        .map(|case| {
+            let ran = match &image {
+                Ok(img) => run::run_case(case, img),
+                Err(e) => run::Ran::Failed {
+                    message: format!("rendering: {e}"),
+                    seconds: 0.0,
+                },
+            };
+            score::score(case, &ran)
+        })
+        .collect()
+}
