@@ -70,11 +70,31 @@ impl PyMeasurement {
         self.column(|s| s.s).into_pyarray(py)
     }
 
-    /// Standard deviation of each sample's position along the normal from
-    /// the image noise, pixels (N; NaN when no stage completed).
+    /// Standard deviation of each sample's position along the normal,
+    /// pixels: the image noise's, combined with the model misfit's where
+    /// the model misfits (N; NaN when no stage completed).
     #[getter]
     fn sigma<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.column(|s| s.sigma).into_pyarray(py)
+    }
+
+    /// The image noise's share of `sigma`, pixels (N; NaN when no stage
+    /// completed).
+    #[getter]
+    fn sigma_noise<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(|s| s.sigma_noise).into_pyarray(py)
+    }
+
+    /// Whether the model misfits at each sample (N booleans; `sigma`
+    /// covers the misfit there).
+    #[getter]
+    fn misfit<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.measurement
+            .samples
+            .iter()
+            .map(|s| s.misfit)
+            .collect::<Vec<bool>>()
+            .into_pyarray(py)
     }
 
     /// The measured B-spline: a dict with `degree` (int), `closed` (bool),

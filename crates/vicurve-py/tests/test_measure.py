@@ -53,6 +53,10 @@ def test_result_arrays_are_consistent(disc150_result):
     assert np.all(outward.sum(axis=1) > 0)
     assert np.all(np.diff(r.s) > 0) and np.max(np.diff(r.s)) <= 1.0 + 1e-9
     assert np.all(np.isfinite(r.sigma))
+    # sigma is the noise's, inflated where the model misfits.
+    assert r.sigma_noise.shape == (n,) and r.misfit.shape == (n,)
+    assert r.misfit.dtype == np.bool_
+    assert np.all(r.sigma >= r.sigma_noise)
     # x = column, y = row: the disc is centred where synth put it.
     np.testing.assert_allclose(circle_centre(r.points), CENTRE, atol=1e-3)
 

@@ -157,10 +157,23 @@ pub struct Sample {
     pub nx: f64,
     /// Unit normal y component.
     pub ny: f64,
-    /// Standard deviation of the position along the normal from the
-    /// Gauss–Newton covariance of the last stage, pixels (noise only: it
-    /// does not include model bias).
+    /// Standard deviation of the position along the normal, pixels: the
+    /// noise term [`Sample::sigma_noise`] combined in quadrature with the
+    /// model-misfit term where the image's edge departs from the model
+    /// (see [`Sample::misfit`]); equal to `sigma_noise` elsewhere. It does
+    /// not include a bias that the residuals cannot show (a model that
+    /// fits the image exactly but places the edge wrongly).
     pub sigma: f64,
+    /// The noise term alone: the Gauss–Newton covariance of the last
+    /// stage, pixels (method, section 8); NaN without a fit.
+    #[serde(default = "nan")]
+    pub sigma_noise: f64,
+    /// Whether the model misfits here: the band's residuals near the
+    /// sample ask for a displacement beyond what the noise explains, or
+    /// the curve oscillates at its elements' scale, by more than the
+    /// noise term; `sigma` then covers that misfit.
+    #[serde(default)]
+    pub misfit: bool,
     /// Mean robust weight of the last stage's band pixels within about a
     /// pixel of this sample, in `[0, 1]`: 1 where nothing was down-weighted,
     /// lower where clutter crossing the band was (see the fit's robust
@@ -208,7 +221,40 @@ pub struct LevelSample {
     pub c: f64,
 }
 
+/// The samples where the model misfits ([`Sample::misfit`]), in brief.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MisfitSummary {
+    /// Samples flagged.
+    pub flagged: usize,
+    /// Their fraction of all samples, in `[0, 1]` (0 without samples).
+    pub fraction: f64,
+    /// The largest `sigma / sigma_noise` over the samples (1 where nothing
+    /// misfits; NaN without a fit).
+    pub worst_inflation: f64,
+}
+
+/// NaN, the serde default of [`Sample::sigma_noise`].
+fn nan() -> f64 {
+    f64::NAN
+}
+
 impl Measurement {
+    /// The samples where the model misfits, in brief.
+    pub fn misfit_summary(&self) -> MisfitSummary {
+        let flagged = self.samples.iter().filter(|s| s.misfit).count();
+        let worst = self
+            .samples
+            .iter()
+            .map(|s| s.sigma / s.sigma_noise)
+            .filter(|r| r.is_finite())
+            .fold(f64::NAN, f64::max);
+        MisfitSummary {
+            flagged,
+            fraction: flagged as f64 / self.samples.len().max(1) as f64,
+            worst_inflation: worst,
+        }
+    }
+
     /// Total Gauss–Newton iterations over all stages.
     pub fn iterations(&self) -> usize {
         self.stages.iter().map(|s| s.iterations).sum()

@@ -24,7 +24,7 @@ use crate::curve::{InitialCurve, SplineCurveData};
 use crate::derived::Derived;
 use crate::fit::grow::GrowReport;
 use crate::fit::FitConfig;
-use crate::measurement::{LevelSample, Measurement, Outcome, StageReport};
+use crate::measurement::{LevelSample, Measurement, MisfitSummary, Outcome, StageReport};
 use crate::psf::EdgeSpread;
 use crate::virtual_image::Kind;
 use serde::Serialize;
@@ -69,6 +69,8 @@ pub struct ResultFile<'a> {
     pub blur_corrected: bool,
     /// Number of output samples.
     pub samples: usize,
+    /// The samples where the model misfits (their `sigma` covers it).
+    pub misfit: MisfitSummary,
     /// Per-stage history.
     pub stages: &'a [StageReport],
     /// Stages of the default schedule that were skipped, with the reason.
@@ -156,6 +158,7 @@ impl<'a> ResultFile<'a> {
             edge_spread: m.edge_spread,
             blur_corrected: m.blur_corrected,
             samples: m.samples.len(),
+            misfit: m.misfit_summary(),
             stages: &m.stages,
             skipped_stages: &m.skipped,
             grow: None,

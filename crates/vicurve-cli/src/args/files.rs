@@ -10,7 +10,7 @@ pub struct Outputs {
     /// Write the result (B-spline, history, outcome, configuration) as JSON.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the samples as CSV with columns s,x,y,nx,ny,sigma,weight.
+    /// Write the samples as CSV with columns s,x,y,nx,ny,sigma,weight,sigma_noise,misfit.
     #[arg(long)]
     pub points: Option<PathBuf>,
     /// Write an SVG overlay (image, initial curve, band, measured curve).

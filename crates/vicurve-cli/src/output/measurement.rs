@@ -160,8 +160,18 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
     if !sig.is_empty() {
         let mean = sig.iter().sum::<f64>() / sig.len() as f64;
         println!(
-            "sigma:       {:.2e} px (mean noise uncertainty of the position)",
+            "sigma:       {:.2e} px (mean uncertainty of the position, model misfit included)",
             mean
+        );
+    }
+    let misfit = m.misfit_summary();
+    if misfit.flagged > 0 {
+        println!(
+            "misfit:      {} of {} samples ({:.1} %) where the model misfits; their sigma is up to {:.1} times the noise's",
+            misfit.flagged,
+            m.samples.len(),
+            100.0 * misfit.fraction,
+            misfit.worst_inflation
         );
     }
 }

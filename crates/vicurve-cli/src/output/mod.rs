@@ -30,21 +30,31 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), String> {
     std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-/// Write the samples as CSV: the header `s,x,y,nx,ny,sigma,weight` (a
-/// contract: other tools read the columns by these names), then one row per
-/// sample (`sigma`: the position's uncertainty in px; `weight`: the share
+/// Write the samples as CSV: the header
+/// `s,x,y,nx,ny,sigma,weight,sigma_noise,misfit` (a contract: other tools
+/// read the columns by these names), then one row per sample (`sigma`: the
+/// position's uncertainty in px, model misfit included; `weight`: the share
 /// of the band kept by the robust weights there, 1 where nothing was
-/// down-weighted).
+/// down-weighted; `sigma_noise`: the noise's share of `sigma`; `misfit`: 1
+/// where the model misfits, else 0).
 pub fn write_points_csv(path: &Path, m: &Measurement) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let file = std::fs::File::create(path).map_err(err)?;
     let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "s,x,y,nx,ny,sigma,weight").map_err(err)?;
+    writeln!(w, "s,x,y,nx,ny,sigma,weight,sigma_noise,misfit").map_err(err)?;
     for s in &m.samples {
         writeln!(
             w,
-            "{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3}",
-            s.s, s.x, s.y, s.nx, s.ny, s.sigma, s.weight
+            "{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3},{:.3e},{}",
+            s.s,
+            s.x,
+            s.y,
+            s.nx,
+            s.ny,
+            s.sigma,
+            s.weight,
+            s.sigma_noise,
+            u8::from(s.misfit)
         )
         .map_err(err)?;
     }

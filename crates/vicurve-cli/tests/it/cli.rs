@@ -45,7 +45,10 @@ fn synth_measure_eval_round_trip() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     // The CSV header is a contract.
     let points = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(points.lines().next(), Some("s,x,y,nx,ny,sigma,weight"));
+    assert_eq!(
+        points.lines().next(),
+        Some("s,x,y,nx,ny,sigma,weight,sigma_noise,misfit")
+    );
     let rows: Vec<Vec<f64>> = points
         .lines()
         .skip(1)

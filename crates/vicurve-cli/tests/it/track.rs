@@ -116,7 +116,10 @@ fn necking_widths_match_the_exact_specimen() {
     assert_eq!(j["outcome"]["status"], "converged");
     assert!(j["derived"].is_object());
     let pts = std::fs::read_to_string(results.join("frame_003.top.csv")).unwrap();
-    assert_eq!(pts.lines().next(), Some("s,x,y,nx,ny,sigma,weight"));
+    assert_eq!(
+        pts.lines().next(),
+        Some("s,x,y,nx,ny,sigma,weight,sigma_noise,misfit")
+    );
     for plot in ["width.png", "width.svg"] {
         assert!(std::fs::metadata(results.join(plot)).unwrap().len() > 1000);
     }

@@ -111,7 +111,13 @@ class Result:
         """Arc length of each sample from the curve's start, pixels (N)."""
     @property
     def sigma(self) -> npt.NDArray[np.float64]:
-        """Noise standard deviation of each sample along the normal, pixels (N)."""
+        """Standard deviation of each sample along the normal, pixels (N): noise and model misfit."""
+    @property
+    def sigma_noise(self) -> npt.NDArray[np.float64]:
+        """The image noise's share of sigma, pixels (N)."""
+    @property
+    def misfit(self) -> npt.NDArray[np.bool_]:
+        """Whether the model misfits at each sample (N); sigma covers it there."""
     @property
     def spline(self) -> Dict[str, Any]:
         """degree, closed, knots (array), control_points (K x 2 array), fit_error."""

@@ -65,9 +65,11 @@
 
 mod global;
 pub mod levels;
+mod misfit;
 mod tilt;
 mod varying;
 
+pub(crate) use misfit::ResidualBin;
 pub(crate) use tilt::Measured as MeasuredTilt;
 
 use crate::band::Band;

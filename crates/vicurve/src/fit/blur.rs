@@ -125,3 +125,54 @@ pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
     let r = std::f64::consts::FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
     (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
 }
+
+/// The shortest element (pixels) whose detail an edge of optical blur
+/// `blur` (pixels) resolves, for the pixel-edge profile: `pi sqrt(v)`, `v =
+/// blur^2 + 1/12` the variance of the whole spread.
+///
+/// Why: the profile places the edge `v kappa / 2` off its blurred half
+/// level, `kappa` the reference's curvature. A settle re-references on the
+/// measured curve, so an oscillation of the curve at wavenumber `k` comes
+/// back in the next reference's curvature and the next fit answers it with
+/// `v k^2 / 2` times its amplitude: a loop gain, the first term of the
+/// blur's true response `exp(v k^2 / 2)` to an oscillation it has all but
+/// erased. The shortest oscillation of elements `h` long has `k = pi / h`;
+/// at `h = pi sqrt(v)` its gain is 1/2 (each settle halves it) and the blur
+/// keeps `exp(-1/2)` = 61 % of it in the image: shorter elements describe
+/// detail the image no longer holds, and above a gain of 1 the settles
+/// grow noise into an oscillation of the curve (a 4 px blur: 8.5 px).
+pub(super) fn resolved_element(blur: f64) -> f64 {
+    std::f64::consts::PI * (blur * blur + 1.0 / 12.0).sqrt()
+}
+
+/// How much the settles of a pixel-edge stage with elements `h` pixels long
+/// amplify the noise of the position, for an optical blur of `blur` pixels
+/// (a factor on the Gauss–Newton `sigma`, at least 1).
+///
+/// Each settle answers the reference's oscillations of wavenumber `k` with
+/// `g = v k^2 / 2` times their amplitude (see [`resolved_element`]), so the
+/// settled curve holds the noise of one fit amplified by `1 / (1 - g)`. The
+/// noise of `U` spreads about evenly over `k` up to `pi / h`: the factor is
+/// the RMS of `1 / (1 - g_h x^2)` over `x` in `[0, 1]`, `g_h` the gain at
+/// `pi / h` (capped at 0.9: above 1 the settles do not converge, and the
+/// oscillation check of the output covers the result).
+pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
+    let v = blur * blur + 1.0 / 12.0;
+    let g = (v * std::f64::consts::PI.powi(2) / (2.0 * h * h)).min(0.9);
+    // Simpson's rule on 16 intervals.
+    let f = |x: f64| (1.0 - g * x * x).powi(-2);
+    let n = 16;
+    let sum: f64 = (0..=n)
+        .map(|i| {
+            let w = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            w * f(i as f64 / n as f64)
+        })
+        .sum();
+    (sum / (3.0 * n as f64)).sqrt()
+}

@@ -22,7 +22,8 @@
 //! - `refine.rs`, `robust.rs`, `blur.rs`: the element refinement, the
 //!   robust weights, the edge's blur and the pixel-edge stage's band.
 //! - `reference.rs`: a converged curve as the next reference.
-//! - `output.rs`: the measured curve and its samples with `sigma`.
+//! - `output.rs`: the measured curve and its samples with `sigma`;
+//!   `misfit.rs`: its model-misfit term (residuals, oscillation).
 //! - [`breaks`], [`grow`], `track.rs`: corners, growing a short start,
 //!   the tracking schedule of a sequence's frames.
 //!
@@ -39,6 +40,7 @@ mod blur;
 pub mod breaks;
 mod config;
 pub mod grow;
+mod misfit;
 mod output;
 mod reference;
 mod refine;

@@ -2,12 +2,15 @@
 //! `x0 + U n` refitted as a B-spline, its samples with normals, `sigma`
 //! and robust weight, and the gray levels along it.
 
+use super::blur::{resolved_element, settle_noise_gain};
 use super::breaks;
+use super::misfit::{oscillation, oscillation_at, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
+use crate::interp::Sampler;
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
@@ -53,9 +56,16 @@ impl Final {
     /// Dense samples of `x0 + U n` (moved by the blur's curvature shift
     /// when `blur` is given, see [`crate::psf`]), the B-spline of `degree`
     /// fitted to them and its largest deviation from them, the output
-    /// samples at most `spacing` pixels apart with `sigma`, and the gray
-    /// levels along the curve when they vary.
-    pub fn samples(&self, spacing: f64, degree: usize, blur: Option<f64>) -> Result<Output> {
+    /// samples at most `spacing` pixels apart with `sigma` (its misfit
+    /// term from the band's residuals on the image of `sampler`), and the
+    /// gray levels along the curve when they vary.
+    pub fn samples(
+        &self,
+        sampler: &Sampler,
+        spacing: f64,
+        degree: usize,
+        blur: Option<f64>,
+    ) -> Result<Output> {
         // The output samples are every `per`-th of the points of `x0 + U
         // n`, so that they are at most `spacing` apart: the points are
         // taken a little closer than `spacing / per` on the reference, for
@@ -93,18 +103,23 @@ impl Final {
         let kept: Vec<usize> = (0..pts.len())
             .filter(|&i| i % every == 0 || (!closed && i + 1 == pts.len()))
             .collect();
+        let normals: Vec<[f64; 2]> = s.par_iter().map(|&si| curve.frame(si).normal).collect();
+        let terms = SigmaTerms::new(self, sampler, (&pts, &normals, &s), blur);
         let samples: Vec<Sample> = kept
             .par_iter()
             .map(|&i| {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
+                let (sigma_noise, misfit) = terms.at(i, params[i]);
                 Sample {
                     s: s[i],
                     x: q[0],
                     y: q[1],
                     nx: f.normal[0],
                     ny: f.normal[1],
-                    sigma: self.corr.position_sigma(params[i]),
+                    sigma: sigma_noise.hypot(misfit),
+                    sigma_noise,
+                    misfit: misfit > sigma_noise,
                     weight: weights.at(params[i]),
                 }
             })
@@ -136,6 +151,69 @@ impl Final {
             }
         }
         levels
+    }
+}
+
+/// The two terms of a sample's `sigma` ([`super::misfit`]), prepared once.
+struct SigmaTerms<'a> {
+    fin: &'a Final,
+    residual: Option<ResidualMisfit>,
+    /// The oscillation at each point of `x0 + U n`, when it is checked.
+    oscillation: Option<Vec<f64>>,
+    /// Points of `x0 + U n` in an element.
+    reach: usize,
+    /// The settles' noise gain on the Gauss–Newton `sigma`.
+    gain: f64,
+}
+
+impl<'a> SigmaTerms<'a> {
+    /// The terms for the points `pts` of `x0 + U n` of `fin`, with their
+    /// unit normals and arc lengths, and the edge's spread `blur` (pixels,
+    /// when its curvature shift was removed).
+    fn new(
+        fin: &'a Final,
+        sampler: &Sampler,
+        (pts, normals, s): (&[[f64; 2]], &[[f64; 2]], &[f64]),
+        blur: Option<f64>,
+    ) -> Self {
+        let closed = fin.reference.is_closed();
+        let step = s.last().copied().unwrap_or(0.0) / (pts.len().max(2) - 1) as f64;
+        let span = fin.corr.basis().element_length();
+        // Elements short enough for the blur's loop gain to exceed 1
+        // (`resolved_element`: `1 / sqrt 2` of it) may oscillate unseen by
+        // the residuals; longer ones follow what the image shows.
+        let resolved = match fin.profile {
+            Profile::PixelEdge { blur } => Some(resolved_element(blur)),
+            Profile::Paper { .. } => blur.map(|b| std::f64::consts::PI * b),
+        };
+        let oscillation = resolved
+            .filter(|&r| span < r * std::f64::consts::FRAC_1_SQRT_2)
+            .map(|_| oscillation(pts, normals, step, span, closed));
+        // A pixel-edge stage's settles amplify the noise of one fit.
+        let gain = match fin.profile {
+            Profile::PixelEdge { blur } => settle_noise_gain(blur, span),
+            Profile::Paper { .. } => 1.0,
+        };
+        SigmaTerms {
+            fin,
+            residual: ResidualMisfit::new(&fin.corr, &fin.lambda, sampler),
+            oscillation,
+            reach: ((span / step.max(1e-9)).round() as usize).max(1),
+            gain,
+        }
+    }
+
+    /// The noise term and the misfit term (pixels) at point `i`, of
+    /// reference parameter `u`.
+    fn at(&self, i: usize, u: f64) -> (f64, f64) {
+        let closed = self.fin.reference.is_closed();
+        let noise = self.gain * self.fin.corr.position_sigma(u);
+        let residual = self.residual.as_ref().map_or(0.0, |r| r.at(u));
+        let oscillation = self
+            .oscillation
+            .as_ref()
+            .map_or(0.0, |o| oscillation_at(o, i, self.reach, noise, closed));
+        (noise, residual.max(oscillation))
     }
 }
 
@@ -198,6 +276,8 @@ pub(super) fn plain_samples(curve: &SplineCurve, spacing: f64) -> Vec<Sample> {
                 nx: f.normal[0],
                 ny: f.normal[1],
                 sigma: f64::NAN,
+                sigma_noise: f64::NAN,
+                misfit: false,
                 weight: f64::NAN,
             }
         })

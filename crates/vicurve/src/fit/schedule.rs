@@ -5,7 +5,8 @@
 //! frame's band is kept for the next frame.
 
 use super::blur::{
-    estimate_spread, matched_band, pixel_edge_band, BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
+    estimate_spread, matched_band, pixel_edge_band, resolved_element, BAND_MISMATCH,
+    MIN_EDGE_FIT_QUALITY,
 };
 use super::output::{plain_samples, Final, Output};
 use super::reference::{next_reference, Clip, CURVE_SPACING};
@@ -242,14 +243,16 @@ impl<'s> Schedule<'s> {
                 // refining further when that stage could (its sine profile
                 // may have stopped on aliasing, which the pixel edge does
                 // not have).
+                // No shorter than the blur resolves (`resolved_element`).
+                let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
+                let floor = resolved_element(blur);
                 let elements = match stage.elements {
                     Elements::Auto { shortest, .. } => Elements::Auto {
-                        longest: chosen,
-                        shortest,
+                        longest: chosen.max(floor),
+                        shortest: shortest.max(floor),
                     },
-                    _ => Elements::Length(chosen),
+                    _ => Elements::Length(chosen.max(floor)),
                 };
-                let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelEdge { blur });
                 self.stages.push(Stage {
@@ -316,7 +319,12 @@ impl<'s> Schedule<'s> {
             fit_error,
             samples,
             levels,
-        } = fin.samples(self.config.sample_spacing, self.config.degree.max(3), blur)?;
+        } = fin.samples(
+            self.sampler,
+            self.config.sample_spacing,
+            self.config.degree.max(3),
+            blur,
+        )?;
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
         }

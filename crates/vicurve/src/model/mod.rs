@@ -548,6 +548,8 @@ impl ModelFit {
                 nx: b.normal[0],
                 ny: b.normal[1],
                 sigma: geometry::quadratic_sigma(&b.grad, &self.internal_cov, p),
+                sigma_noise: geometry::quadratic_sigma(&b.grad, &self.internal_cov, p),
+                misfit: false,
                 weight: 1.0,
             })
             .collect())

@@ -309,6 +309,8 @@ impl BsplineCurveFit {
                     nx: f.normal[0],
                     ny: f.normal[1],
                     sigma: self.sigma_at(u, f.normal),
+                    sigma_noise: self.sigma_at(u, f.normal),
+                    misfit: false,
                     weight: 1.0,
                 }
             })

@@ -7,6 +7,7 @@ mod breaks;
 mod grow;
 mod levels;
 mod robust;
+mod sigma;
 mod track;
 mod uncertainty;
 

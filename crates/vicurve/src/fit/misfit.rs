@@ -1,0 +1,160 @@
+//! The model-misfit term of the output's `sigma`: where the image's edge
+//! departs from what the model can follow, the noise-only Gauss–Newton
+//! `sigma` says nothing of the error. Two checks, made once on the last
+//! stage's result:
+//!
+//! - **Residuals.** The band pixels whose foot lies near a sample ask for
+//!   an extra displacement `d` ([`crate::correlation`]'s residual bins, 1
+//!   px long). Under noise alone `A d^2` (`A` the bin's information) has
+//!   mean `sigma_n^2` in each bin; over the bins within half an element of
+//!   the sample, the excess of `sum A d^2` over `n sigma_n^2`, when it
+//!   exceeds the noise's chi-square spread, gives the misfit's mean square
+//!   displacement `(sum A d^2 - n sigma_n^2) / sum A`.
+//! - **Oscillation.** A curve that oscillates at its elements' scale (a
+//!   feedback through the blur's curvature term, a spline chasing
+//!   detail the image cannot resolve) leaves no residual: the model's image
+//!   of the oscillating curve matches the image. The normal second
+//!   differences of the curve at spans `a`, `2a` and `3a` (`a` the element
+//!   length) combine to `D(a) - 0.4 D(2a) + D(3a) / 15`, which cancels the
+//!   curvature and its second derivative of a smooth curve (terms in `a^2`
+//!   and `a^4`) and is `2.13 A` for an oscillation of amplitude `A` and
+//!   wavelength `2a`; under noise alone it is about the position's `sigma`.
+//!   Beyond `OSCILLATION_SIGNIFICANCE` times that, `|.| / 2.13`, the largest
+//!   within a span, is the misfit there.
+
+use crate::correlation::{Correlation, ResidualBin};
+use crate::interp::Sampler;
+
+/// Length of a residual bin along the reference, pixels.
+const BIN: f64 = 1.0;
+/// The request of a window counts beyond this many of its noise standard
+/// deviations.
+const REQUEST_SIGNIFICANCE: f64 = 4.0;
+/// The oscillation counts beyond this many times the noise `sigma`.
+const OSCILLATION_SIGNIFICANCE: f64 = 4.0;
+/// `D(a) - 0.4 D(2a) + D(3a) / 15` of an oscillation of wavelength `2a`,
+/// per unit amplitude.
+const OSCILLATION_GAIN: f64 = 2.0 + 2.0 / 15.0;
+
+/// The residual check, prepared once for a result.
+pub(super) struct ResidualMisfit {
+    bins: Vec<ResidualBin>,
+    /// Per-pixel noise variance, gray levels squared.
+    noise: f64,
+    /// Bins on each side of a sample's.
+    reach: usize,
+    closed: bool,
+}
+
+impl ResidualMisfit {
+    /// The residuals of `corr` at `lambda` (none without a noise estimate).
+    pub fn new(corr: &Correlation, lambda: &[f64], sampler: &Sampler) -> Option<Self> {
+        let noise = corr.noise_var().filter(|v| *v > 0.0)?;
+        let bins = corr.residual_bins(lambda, sampler, BIN);
+        if bins.is_empty() {
+            return None;
+        }
+        let reach = ((0.25 * corr.basis().element_length() / BIN).round() as usize).max(1);
+        Some(ResidualMisfit {
+            bins,
+            noise,
+            reach,
+            closed: corr.basis().is_closed(),
+        })
+    }
+
+    /// The misfit's RMS displacement near reference parameter `u`, pixels
+    /// (0 where the residuals are those of noise).
+    pub fn at(&self, u: f64) -> f64 {
+        let n = self.bins.len();
+        let k = ((u.max(0.0) / BIN) as usize).min(n - 1);
+        let (mut sum, mut info, mut count) = (0.0, 0.0, 0.0);
+        for off in -(self.reach as isize)..=self.reach as isize {
+            let j = k as isize + off;
+            let j = if self.closed {
+                j.rem_euclid(n as isize) as usize
+            } else if (0..n as isize).contains(&j) {
+                j as usize
+            } else {
+                continue;
+            };
+            let b = &self.bins[j];
+            sum += b.projected;
+            info += b.info;
+            count += 1.0;
+        }
+        // The window's request `sum / info` has variance `noise / info`
+        // under noise alone.
+        if count == 0.0
+            || info <= 0.0
+            || sum * sum / info <= REQUEST_SIGNIFICANCE.powi(2) * self.noise
+        {
+            return 0.0;
+        }
+        (sum / info).abs()
+    }
+}
+
+/// The oscillation at each of the points `pts` (about equally spaced,
+/// `step` pixels apart, closed or not) with unit normals `normals`, at the
+/// span `span` (pixels): `|D(a) - 0.4 D(2a) + D(3a) / 15|` (0 where an
+/// open curve's end is nearer than `3a`).
+pub(super) fn oscillation(
+    pts: &[[f64; 2]],
+    normals: &[[f64; 2]],
+    step: f64,
+    span: f64,
+    closed: bool,
+) -> Vec<f64> {
+    let n = pts.len();
+    let m = ((span / step).round() as usize).max(1);
+    let mut out = vec![0.0; n];
+    if 6 * m >= n {
+        return out;
+    }
+    let at = |i: usize, off: isize| -> Option<[f64; 2]> {
+        let j = i as isize + off;
+        if closed {
+            Some(pts[j.rem_euclid(n as isize) as usize])
+        } else {
+            (0..n as isize).contains(&j).then(|| pts[j as usize])
+        }
+    };
+    for (i, o) in out.iter_mut().enumerate() {
+        let d = |k: isize| -> Option<f64> {
+            let (a, b) = (at(i, -k)?, at(i, k)?);
+            let q = pts[i];
+            let nn = normals[i];
+            Some((q[0] - 0.5 * (a[0] + b[0])) * nn[0] + (q[1] - 0.5 * (a[1] + b[1])) * nn[1])
+        };
+        let mi = m as isize;
+        if let (Some(d1), Some(d2), Some(d3)) = (d(mi), d(2 * mi), d(3 * mi)) {
+            *o = (d1 - 0.4 * d2 + d3 / 15.0).abs();
+        }
+    }
+    out
+}
+
+/// The oscillation misfit at point `i`: the largest oscillation within
+/// `m` points of it, as an amplitude (pixels), when it exceeds
+/// `OSCILLATION_SIGNIFICANCE` times the noise `sigma` there; else 0.
+pub(super) fn oscillation_at(osc: &[f64], i: usize, m: usize, sigma: f64, closed: bool) -> f64 {
+    let n = osc.len();
+    let mut worst: f64 = 0.0;
+    for off in -(m as isize)..=m as isize {
+        let j = i as isize + off;
+        let j = if closed {
+            j.rem_euclid(n as isize) as usize
+        } else if (0..n as isize).contains(&j) {
+            j as usize
+        } else {
+            continue;
+        };
+        worst = worst.max(osc[j]);
+    }
+    if worst > OSCILLATION_SIGNIFICANCE * sigma {
+        worst / OSCILLATION_GAIN
+    } else {
+        0.0
+    }
+}
