@@ -134,7 +134,8 @@ impl PyMeasurement {
     }
 
     /// Why a diverged fit stopped: "left_image", "no_contrast",
-    /// "non_finite" or "degenerate"; None otherwise.
+    /// "non_finite", "degenerate", "self_intersecting" or "folded_back";
+    /// None otherwise.
     #[getter]
     fn divergence(&self) -> Option<&'static str> {
         match self.measurement.outcome {
@@ -143,6 +144,8 @@ impl PyMeasurement {
                 Divergence::NoContrast => "no_contrast",
                 Divergence::NonFinite => "non_finite",
                 Divergence::Degenerate => "degenerate",
+                Divergence::SelfIntersecting { .. } => "self_intersecting",
+                Divergence::FoldedBack { .. } => "folded_back",
             }),
             _ => None,
         }

@@ -25,6 +25,23 @@ pub enum Divergence {
     /// The normal matrix of a new reference is singular (an element sees no
     /// image gradient), or the new reference is degenerate.
     Degenerate,
+    /// The curve crosses itself near this point: no edge does, so the band
+    /// lost the edge there (see `fit::loops`).
+    SelfIntersecting {
+        /// x (column), pixels.
+        x: f64,
+        /// y (row), pixels.
+        y: f64,
+    },
+    /// The curve folded back on itself near this point: the displacement
+    /// ran the reference backwards there, or a closed curve turns more (or
+    /// less) than once round (it loops).
+    FoldedBack {
+        /// x (column), pixels.
+        x: f64,
+        /// y (row), pixels.
+        y: f64,
+    },
 }
 
 impl std::fmt::Display for Divergence {
@@ -39,6 +56,15 @@ impl std::fmt::Display for Divergence {
             Divergence::NonFinite => f.write_str("the unknowns became NaN or infinite"),
             Divergence::Degenerate => {
                 f.write_str("the curve became degenerate (an element sees no gradient)")
+            }
+            Divergence::SelfIntersecting { x, y } => {
+                write!(f, "the curve crosses itself near ({x:.1}, {y:.1})")
+            }
+            Divergence::FoldedBack { x, y } => {
+                write!(
+                    f,
+                    "the curve folded back on itself (loops) near ({x:.1}, {y:.1})"
+                )
             }
         }
     }

@@ -22,6 +22,8 @@
 //! - `refine.rs`, `robust.rs`, `blur.rs`: the element refinement, the
 //!   robust weights, the edge's blur and the pixel-edge stage's band.
 //! - `reference.rs`: a converged curve as the next reference.
+//! - `loops.rs`: a new reference or result that crosses itself or folds
+//!   back is a divergence.
 //! - `output.rs`: the measured curve and its samples with `sigma`;
 //!   `misfit.rs`: its model-misfit term (residuals, oscillation).
 //! - [`breaks`], [`grow`], `track.rs`: corners, growing a short start,
@@ -40,6 +42,7 @@ mod blur;
 pub mod breaks;
 mod config;
 pub mod grow;
+mod loops;
 mod misfit;
 mod output;
 mod reference;

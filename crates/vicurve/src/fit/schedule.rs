@@ -8,6 +8,7 @@ use super::blur::{
     estimate_spread, matched_band, pixel_edge_band, resolved_element, BAND_MISMATCH,
     MIN_EDGE_FIT_QUALITY,
 };
+use super::loops;
 use super::output::{plain_samples, Final, Output};
 use super::reference::{next_reference, Clip, CURVE_SPACING};
 use super::run::largest_change;
@@ -325,6 +326,7 @@ impl<'s> Schedule<'s> {
             self.config.degree.max(3),
             blur,
         )?;
+        self.check_loops(&samples, curve.is_closed());
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
         }
@@ -339,6 +341,22 @@ impl<'s> Schedule<'s> {
             blur_corrected: blur.is_some() || pixel_edge_result,
             levels,
         })
+    }
+
+    /// The output samples crossing themselves or looping (see [`loops`])
+    /// make a fit that has not failed yet a divergence, its last stage's
+    /// report included.
+    fn check_loops(&mut self, samples: &[super::Sample], closed: bool) {
+        if matches!(self.outcome, Outcome::Diverged { .. }) {
+            return;
+        }
+        let points: Vec<[f64; 2]> = samples.iter().map(|s| [s.x, s.y]).collect();
+        if let Some(divergence) = loops::looped(&points, closed) {
+            self.outcome = Outcome::Diverged { divergence };
+            if let Some(last) = self.reports.last_mut() {
+                last.outcome = self.outcome;
+            }
+        }
     }
 
     /// Tracking: the frame's last band, kept for the next frame (see

@@ -12,6 +12,7 @@
 //! the stage is done, and its result the next stage's reference.
 
 use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
+use super::loops;
 use super::output::Final;
 use super::reference::{next_reference, reference_spacing, Clip, CURVE_SPACING};
 use super::refine::{refine, Fitted, RefineBand};
@@ -24,6 +25,7 @@ use super::{
 };
 use crate::band::Band;
 use crate::correlation::{Correlation, MeasuredTilt, Step};
+use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::spline::Basis;
 use crate::virtual_image::{Kind, Profile};
@@ -367,8 +369,13 @@ impl Schedule<'_> {
         match end {
             Run::Rereference => {
                 let spacing = reference_spacing(system.corr.basis());
-                self.move_reference(st, system.corr.basis(), &lambda, spacing)?;
-                Ok(Next::Again)
+                match self.move_reference(st, system.corr.basis(), &lambda, spacing)? {
+                    None => Ok(Next::Again),
+                    Some(looped) => {
+                        let system = (system.profile, system.corr.basis(), system.band_pixels);
+                        Ok(self.diverge(st, looped, system))
+                    }
+                }
             }
             Run::Failed(divergence) if st.appended => {
                 self.skipped
@@ -552,19 +559,24 @@ impl Schedule<'_> {
     }
 
     /// A new reference `x0 + U n`, control points `spacing` apart, for the
-    /// stage's next run; tracking records how far the curve moved.
+    /// stage's next run; tracking records how far the curve moved. A curve
+    /// that folds back or loops is not taken: how it does is returned.
     fn move_reference(
         &mut self,
         st: &mut StageState,
         basis: &Basis,
         lambda: &[f64],
         spacing: f64,
-    ) -> Result<()> {
-        self.current = next_reference(&self.current, basis, lambda, spacing, st.clip)?;
+    ) -> Result<Option<Divergence>> {
+        let next = match checked_reference(&self.current, basis, lambda, spacing, st.clip)? {
+            Ok(next) => next,
+            Err(looped) => return Ok(Some(looped)),
+        };
+        self.current = next;
         st.rereferences += 1;
         let moved = largest_change(lambda, self.run_start.as_deref());
         self.moved_before = Some(self.moved_before.unwrap_or(0.0) + moved);
-        Ok(())
+        Ok(None)
     }
 
     /// A run that converged (or reached its iteration limit, `o`): the
@@ -593,15 +605,30 @@ impl Schedule<'_> {
         let settle = self.settles(st, &lambda, o, windowed, again);
         if again || settle {
             let spacing = corr.basis().element_length().max(CURVE_SPACING);
-            self.move_reference(st, corr.basis(), &lambda, spacing)?;
+            if let Some(looped) = self.move_reference(st, corr.basis(), &lambda, spacing)? {
+                return Ok(self.diverge(st, looped, (profile, corr.basis(), band_pixels)));
+            }
             st.settles += 1;
             return Ok(Next::Again);
         }
         if let (None, Some(_)) = (corr.noise_var(), st.step) {
             corr.estimate_noise(&lambda, self.sampler);
         }
-        self.complete(st, (corr, lambda), (profile, band_pixels), o)?;
-        Ok(Next::Exit(Flow::Completed))
+        self.complete(st, (corr, lambda), (profile, band_pixels), o)
+    }
+
+    /// The stage's run ended on a curve that loops (`looped`): the fit
+    /// diverged, even in an appended stage (whose other failures leave the
+    /// previous result standing): a curve that wants to cross itself is no
+    /// measurement of a simple edge, and the previous result lies next to it.
+    fn diverge(
+        &mut self,
+        st: &mut StageState,
+        looped: Divergence,
+        system: (Profile, &Basis, usize),
+    ) -> Next {
+        self.fail(st, looped, system);
+        Next::Exit(Flow::Stop)
     }
 
     /// The checks a stage makes on its converged runs: varying levels
@@ -669,25 +696,25 @@ impl Schedule<'_> {
     /// The stage is done: its report, and its result as the schedule's
     /// last, the converged curve becoming the next stage's reference (or
     /// the curve the edge's spread is measured on after the last stage;
-    /// the tracking schedule's one stage needs neither).
+    /// the tracking schedule's one stage needs neither). A result that
+    /// folds back or loops is a divergence instead.
     fn complete(
         &mut self,
         st: &mut StageState,
         (corr, lambda): (Correlation, Vec<f64>),
         (profile, band_pixels): (Profile, usize),
         o: Outcome,
-    ) -> Result<()> {
+    ) -> Result<Next> {
         let next = if self.tracked.is_some() && st.is_last {
             None
         } else {
             let spacing = reference_spacing(corr.basis());
-            Some(next_reference(
-                &self.current,
-                corr.basis(),
-                &lambda,
-                spacing,
-                st.clip,
-            )?)
+            match checked_reference(&self.current, corr.basis(), &lambda, spacing, st.clip)? {
+                Ok(next) => Some(next),
+                Err(looped) => {
+                    return Ok(self.diverge(st, looped, (profile, corr.basis(), band_pixels)))
+                }
+            }
         };
         let report = st.report(profile, corr.basis(), band_pixels, o);
         self.reports.push(report);
@@ -701,7 +728,7 @@ impl Schedule<'_> {
             corr,
             lambda,
         });
-        Ok(())
+        Ok(Next::Exit(Flow::Completed))
     }
 
     /// The run again with the global pair of levels (already set in the
@@ -810,4 +837,20 @@ impl Schedule<'_> {
         st.previous_move = if again { f64::INFINITY } else { moved };
         settle
     }
+}
+
+/// [`next_reference`], or how it loops: the new curve crosses itself, or
+/// turns more (or less) than once round ([`loops`]).
+fn checked_reference(
+    reference: &SplineCurve,
+    basis: &Basis,
+    lambda: &[f64],
+    spacing: f64,
+    clip: Clip,
+) -> Result<std::result::Result<SplineCurve, Divergence>> {
+    let next = next_reference(reference, basis, lambda, spacing, clip)?;
+    Ok(match loops::curve_loops(&next) {
+        Some(looped) => Err(looped),
+        None => Ok(next),
+    })
 }

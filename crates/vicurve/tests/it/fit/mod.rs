@@ -4,6 +4,7 @@
 //! docs/benchmarks.md.
 
 mod breaks;
+mod far;
 mod grow;
 mod levels;
 mod robust;
