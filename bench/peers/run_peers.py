@@ -63,11 +63,15 @@ row i, column j is at (x, y) = (j, i). Every peer's output is converted to it:
 * ridge-detector: each detected line (``detector.contours[k]``) has
   ``.col`` (column) and ``.row`` (row) arrays, pixel centres at integers (its
   code adds the sub-pixel offset to ``np.mgrid[0:height, 0:width]``), so
-  x = col, y = row, no offset. Checked on the noiseless ring (3 px, blur
-  1, r = 150 about (255.8, 255.3), which is off-centre by 0.5 px in x - y so
-  that a swap shows): x = col, y = row gives a mean radial error of -0.010 px
-  (the curvature shift of a smoothed ring, -(sigma^2 + blur^2 + w^2/12)/(2 r))
-  and an RMS of 0.024 px; the swapped reading gives an RMS of 0.50 px.
+  x = col, y = row, no offset. Checked on a noiseless ring (``vicurve synth
+  ring --line 3 --blur 1``: r = 153.6 about (255.8, 255.3), whose centre is
+  0.5 px off the diagonal so that a swap shows) with line_widths=[3]:
+  x = col, y = row gives a mean radial error of -0.010 px (the curvature
+  shift of a smoothed ring, about -(sigma^2 + blur^2 + w^2/12)/(2 r) =
+  -0.012 px) and an RMS of 0.024 px; the swapped reading gives an RMS of
+  0.50 px. (Its first-derivative masks come out with the opposite sign under
+  ``scipy.ndimage.convolve``, which flips kernels, and its code drops the
+  minus sign of Steger's eq. 23; the two cancel, as this check shows.)
 
 How each tool is called
 -----------------------
@@ -132,8 +136,11 @@ How each tool is called
     dark lines the library uses ``255 - high_contrast`` as its low contrast
     and ``255 - low_contrast`` as its high one, so ``255 - high`` and
     ``255 - low`` are passed. Note: the library takes ``floor()`` of the
-    scaled thresholds, so at the wide LW of ``steger-wapp`` they round to 0
-    (every ridge point is kept; the 3 px rule below then selects the line).
+    scaled thresholds, so at the widest LW (``steger-wapp`` at blur 4) they
+    round to 0 (every ridge point is kept, up to 10^5 points and 35 s a run on
+    noiseless images; the 3 px rule below then selects the line); at the true
+    width of a 2.5 px line blurred by 4 px they are above its response and it
+    finds no line (a "no point kept" row).
 
   Selection: every point of every detected line within 3 px of the truth
   curve is kept, the rest (noise lines) dropped; the same rule on every
@@ -148,7 +155,7 @@ Timing
 Peers: wall clock (``time.perf_counter``) of the extraction only, with the
 image already in memory as a NumPy array (level estimation, threshold,
 extraction, selection/filtering included), best of ``--repeats`` runs after
-one warm-up; Steger's detector (pure Python, 1 to 15 s a run) is timed once,
+one warm-up; Steger's detector (pure Python, 1 to 35 s a run) is timed once,
 after a warm-up of its numba functions on a small image, shared filtering and
 linking included in each of its rows. vicurve: (a) the sum of the per-stage
 ``seconds`` in its ``--out`` JSON (the fit only: this is the "time" column,
@@ -777,7 +784,7 @@ def main():
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with open(work_root / "rows.json", "w") as f:
-        json.dump(dict(rows=rows, summary=summary), f)
+        json.dump(dict(rows=rows, summary=summary, commands=commands), f)
     with open(out_dir / "results.csv", "w", newline="") as f:
         wr = csv.DictWriter(f, fieldnames=FIELDS)
         wr.writeheader()
@@ -920,6 +927,13 @@ def write_markdown(path, rows, summary, cases, commands, args, jit, elapsed):
              "are kept (noise lines dropped): a selection that uses the truth and can only "
              "favour the peer. Its contrast thresholds are floored by the library and become 0 "
              "at wide line widths (every ridge point is then kept).")
+    L.append("- Noiseless bright and dark lines are exact mirror images (levels 51 and 204 "
+             "of 255 swapped, 51 + 204 = 255), so each tool's figures on the two are the same: "
+             "a check that every tool treats both polarities alike. With noise the seeds "
+             "differ.")
+    L.append("- A `steger-*` row with \"no point kept\" means the detector found no line at "
+             "that setting (its thresholds, at the small sigma of the true width, are above the "
+             "response of a line blurred well beyond its width); the other settings count.")
     L.append("- Open curves: every tool, vicurve included, is scored on x in [20, 491]; "
              "rows `vicurve(--init segment:...)` are other starts a user might draw.")
     L.append("")
