@@ -2,6 +2,7 @@
 //! matched to the edge (the paper's optimum `R_g = R_f`) or the pixel-edge
 //! profile through that blur, whose own blur is then fitted on the band.
 
+use super::reference::{trim_to_band, Clip, TRIM_MARGIN};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
@@ -45,20 +46,35 @@ const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
 /// The spread of the edge (silhouettes) or line (contours) around
 /// `curve` ([`psf::edge_spread`], [`psf::line_spread`]). An edge's search is
 /// bounded by a third of the band, so a result near that bound is estimated
-/// again on a band four times the spread.
+/// again on a band four times the spread. An open curve that crosses the
+/// image border is taken where each band fits in the image.
 pub(super) fn estimate_spread(
     sampler: &Sampler,
     curve: &SplineCurve,
     kind: Kind,
 ) -> Option<psf::EdgeSpread> {
+    // An open curve that crosses the image border: the stretch whose band
+    // fits (see `trim_to_band`).
+    let within = |half_width: f64| {
+        let clip = Clip {
+            half_width,
+            margin: TRIM_MARGIN,
+            width: sampler.width(),
+            height: sampler.height(),
+        };
+        trim_to_band(curve, clip).ok().map(|(stretch, _)| stretch)
+    };
     if kind == Kind::Contour {
-        return psf::line_spread(sampler, curve, EDGE_SPREAD_BAND);
+        return psf::line_spread(sampler, &within(EDGE_SPREAD_BAND)?, EDGE_SPREAD_BAND);
     }
-    let first = psf::edge_spread(sampler, curve, EDGE_SPREAD_BAND)?;
+    let first = psf::edge_spread(sampler, &within(EDGE_SPREAD_BAND)?, EDGE_SPREAD_BAND)?;
     if first.sigma < 0.9 * EDGE_SPREAD_BAND / 3.0 {
         return Some(first);
     }
-    psf::edge_spread(sampler, curve, 4.0 * first.sigma).or(Some(first))
+    let wide = 4.0 * first.sigma;
+    within(wide)
+        .and_then(|stretch| psf::edge_spread(sampler, &stretch, wide))
+        .or(Some(first))
 }
 
 /// The band half-width that sees the whole edge or line: `2.5 s` for an
