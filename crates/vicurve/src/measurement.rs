@@ -207,6 +207,53 @@ pub struct Sample {
     pub weight: f64,
 }
 
+/// Why an open curve's measurement stops short of the curve it started
+/// from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrimReason {
+    /// The last stage's band would leave the image beyond this end (an
+    /// edge or line that crosses the image border): the curve is measured
+    /// where its band is whole.
+    BandLeavesImage,
+}
+
+/// One end of an open measured curve that was trimmed (see [`Trim`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrimmedEnd {
+    /// x (column) of the measured curve's end, pixels.
+    pub x: f64,
+    /// y (row) of the measured curve's end, pixels.
+    pub y: f64,
+    /// Length of the curve beyond this end that was not measured (up to
+    /// the start's end, or to where that curve, carried along by the fit,
+    /// leaves the image), pixels.
+    pub removed: f64,
+    /// Reach of the band that would leave the image: the last stage's
+    /// half-width `R` (plus a tracked band's margin), pixels.
+    pub half_width: f64,
+    /// Why.
+    pub reason: TrimReason,
+}
+
+/// Where an open measured curve was trimmed, per end: `None` (`null` in
+/// the result file) where it reaches the end of the curve it was measured
+/// from. Closed curves are never trimmed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Trim {
+    /// The end at the curve's start (arc length 0).
+    pub start: Option<TrimmedEnd>,
+    /// The end at the curve's end.
+    pub end: Option<TrimmedEnd>,
+}
+
+impl Trim {
+    /// Whether either end was trimmed.
+    pub fn is_trimmed(&self) -> bool {
+        self.start.is_some() || self.end.is_some()
+    }
+}
+
 /// The result of [`crate::fit::measure`].
 #[derive(Clone, Debug)]
 pub struct Measurement {
@@ -224,6 +271,9 @@ pub struct Measurement {
     pub stages: Vec<StageReport>,
     /// Stages of the default schedule that were skipped, with the reason.
     pub skipped: Vec<String>,
+    /// Where an open curve was trimmed because its band would leave the
+    /// image (none for closed curves).
+    pub trim: Trim,
     /// The blur of the edge estimated on the measured curve (silhouettes
     /// with blur correction on), see [`crate::psf`].
     pub edge_spread: Option<crate::psf::EdgeSpread>,

@@ -24,7 +24,7 @@ use crate::curve::{InitialCurve, SplineCurveData};
 use crate::derived::Derived;
 use crate::fit::grow::GrowReport;
 use crate::fit::FitConfig;
-use crate::measurement::{LevelSample, Measurement, MisfitSummary, Outcome, StageReport};
+use crate::measurement::{LevelSample, Measurement, MisfitSummary, Outcome, StageReport, Trim};
 use crate::psf::EdgeSpread;
 use crate::virtual_image::Kind;
 use serde::Serialize;
@@ -75,6 +75,11 @@ pub struct ResultFile<'a> {
     pub stages: &'a [StageReport],
     /// Stages of the default schedule that were skipped, with the reason.
     pub skipped_stages: &'a [String],
+    /// Open curves: where each end was trimmed because the band would
+    /// leave the image (`null` for an end measured to the start's end);
+    /// absent for closed curves.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trim: Option<Trim>,
     /// How the curve grew from a short start ([`crate::fit::grow`]);
     /// absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -161,6 +166,7 @@ impl<'a> ResultFile<'a> {
             misfit: m.misfit_summary(),
             stages: &m.stages,
             skipped_stages: &m.skipped,
+            trim: (!m.curve.is_closed()).then_some(m.trim),
             grow: None,
         }
     }

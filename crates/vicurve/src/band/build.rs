@@ -240,14 +240,21 @@ impl Band {
 
 /// The curve and the two borders of its band must lie inside the domain of
 /// the interpolated image, `[0, width - 1] x [0, height - 1]`.
-fn check_inside(curve: &SplineCurve, half_width: f64, width: usize, height: usize) -> Result<()> {
-    let (w, h) = (width as f64 - 1.0, height as f64 - 1.0);
-    let inside = |p: [f64; 2]| p[0] >= 0.0 && p[1] >= 0.0 && p[0] <= w && p[1] <= h;
-    let count = (curve.param_length().ceil() as usize).max(8);
-    let params = curve.sample_params(if curve.is_closed() { count } else { count + 1 });
+///
+/// Errors: [`Error::CurveOutsideImage`] at the first point of the curve
+/// outside, else [`Error::BandOutsideImage`] at the first band border
+/// outside.
+pub(crate) fn check_inside(
+    curve: &SplineCurve,
+    half_width: f64,
+    width: usize,
+    height: usize,
+) -> Result<()> {
+    let domain = Domain::new(width, height, 0.0);
+    let params = check_params(curve, 1.0);
     for &u in &params {
         let f = curve.frame(u);
-        if !inside(f.point) {
+        if !domain.holds(f.point) {
             return Err(Error::CurveOutsideImage {
                 x: f.point[0],
                 y: f.point[1],
@@ -257,22 +264,121 @@ fn check_inside(curve: &SplineCurve, half_width: f64, width: usize, height: usiz
         }
     }
     for &u in &params {
-        let f = curve.frame(u);
-        for side in [-1.0, 1.0] {
-            // On the concave side the band stops before the centre of curvature.
-            let mut r = side * half_width;
-            if f.curvature * r > 0.0 {
-                r = r.signum() * r.abs().min((1.0 - MIN_JACOBIAN) / f.curvature.abs());
-            }
-            let q = [f.point[0] + r * f.normal[0], f.point[1] + r * f.normal[1]];
-            if !inside(q) {
-                return Err(Error::BandOutsideImage {
-                    half_width,
-                    x: q[0],
-                    y: q[1],
-                });
-            }
+        if let Some(q) = band_outside(curve, u, half_width, &domain) {
+            return Err(Error::BandOutsideImage {
+                half_width,
+                x: q[0],
+                y: q[1],
+            });
         }
     }
     Ok(())
+}
+
+/// Spacing of the parameters at which [`inside_stretch`] tests an open
+/// curve, pixels: half a pixel, so that its trim is within that of where
+/// the band first leaves the image.
+const STRETCH_STEP: f64 = 0.5;
+
+/// The longest stretch `[u0, u1]` of the open `curve`'s parameter over
+/// which the curve and the two borders of its band of half-width `reach`
+/// (pixels) stay at least `margin` pixels inside the domain of the
+/// interpolated image (`[0, width - 1] x [0, height - 1]`), tested every
+/// [`STRETCH_STEP`]: where an open curve that reaches the border (an edge
+/// crossing the image) can be measured with a whole band. `[0, L]` when
+/// the whole curve can; a closed curve is tested as [`Band::new`] tests it.
+///
+/// Errors: [`Error::CurveOutsideImage`] at the first point of the curve
+/// outside the domain when no point is in it, else
+/// [`Error::BandOutsideImage`] at the first band border outside when no
+/// band fits, as [`Band::new`] gives them.
+pub(crate) fn inside_stretch(
+    curve: &SplineCurve,
+    reach: f64,
+    margin: f64,
+    width: usize,
+    height: usize,
+) -> Result<(f64, f64)> {
+    let l = curve.param_length();
+    if curve.is_closed() {
+        return check_inside(curve, reach, width, height).map(|()| (0.0, l));
+    }
+    let domain = Domain::new(width, height, margin);
+    let params = check_params(curve, STRETCH_STEP);
+    let ok =
+        |u: f64| domain.holds(curve.point(u)) && band_outside(curve, u, reach, &domain).is_none();
+    let (mut best, mut run) = (None::<(usize, usize)>, None::<usize>);
+    for (i, &u) in params.iter().enumerate() {
+        match (ok(u), run) {
+            (true, None) => run = Some(i),
+            (false, Some(a)) => {
+                if best.is_none_or(|(b0, b1)| i - 1 - a > b1 - b0) {
+                    best = Some((a, i - 1));
+                }
+                run = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = run {
+        let last = params.len() - 1;
+        if best.is_none_or(|(b0, b1)| last - a > b1 - b0) {
+            best = Some((a, last));
+        }
+    }
+    match best {
+        Some((a, b)) if b > a => Ok((params[a], params[b])),
+        _ => check_inside(curve, reach, width, height).and_then(|()| {
+            // Inside the domain but not within the margin of it.
+            let p = curve.point(0.0);
+            Err(Error::BandOutsideImage {
+                half_width: reach,
+                x: p[0],
+                y: p[1],
+            })
+        }),
+    }
+}
+
+/// The parameters at which the band checks test `curve`: about `step`
+/// pixels apart, at least 8, both ends of an open curve included.
+fn check_params(curve: &SplineCurve, step: f64) -> Vec<f64> {
+    let count = ((curve.param_length() / step).ceil() as usize).max(8);
+    curve.sample_params(if curve.is_closed() { count } else { count + 1 })
+}
+
+/// The domain of the interpolated image, shrunk by a margin (pixels).
+struct Domain {
+    lo: f64,
+    x_hi: f64,
+    y_hi: f64,
+}
+
+impl Domain {
+    fn new(width: usize, height: usize, margin: f64) -> Self {
+        Domain {
+            lo: margin,
+            x_hi: width as f64 - 1.0 - margin,
+            y_hi: height as f64 - 1.0 - margin,
+        }
+    }
+
+    fn holds(&self, p: [f64; 2]) -> bool {
+        p[0] >= self.lo && p[1] >= self.lo && p[0] <= self.x_hi && p[1] <= self.y_hi
+    }
+}
+
+/// The first of the two borders of the band of half-width `half_width`
+/// around `curve` at `u` outside `domain`, if one is. On the concave side
+/// the band stops before the centre of curvature.
+fn band_outside(curve: &SplineCurve, u: f64, half_width: f64, domain: &Domain) -> Option<[f64; 2]> {
+    let f = curve.frame(u);
+    [-1.0, 1.0].into_iter().find_map(|side: f64| {
+        let mut r = side * half_width;
+        if f.curvature * r > 0.0 {
+            r = r.signum() * r.abs().min((1.0 - MIN_JACOBIAN) / f.curvature.abs());
+        }
+        let q = [f.point[0] + r * f.normal[0], f.point[1] + r * f.normal[1]];
+        (!domain.holds(q)).then_some(q)
+    })
 }

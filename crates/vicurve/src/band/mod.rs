@@ -89,6 +89,7 @@ mod raster;
 mod window;
 
 pub use build::BandParams;
+pub(crate) use build::{check_inside, inside_stretch};
 pub use coords::Coords;
 pub use raster::BandScratch;
 

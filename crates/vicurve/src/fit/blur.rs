@@ -2,6 +2,7 @@
 //! matched to the edge (the paper's optimum `R_g = R_f`) or the pixel-edge
 //! profile through that blur, whose own blur is then fitted on the band.
 
+use super::reference::{trim_to_band, Clip, TRIM_MARGIN};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
@@ -47,20 +48,35 @@ const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
 /// The spread of the edge (silhouettes) or line (contours) around
 /// `curve` ([`psf::edge_spread`], [`psf::line_spread`]). An edge's search is
 /// bounded by a third of the band, so a result near that bound is estimated
-/// again on a band four times the spread.
+/// again on a band four times the spread. An open curve that crosses the
+/// image border is taken where each band fits in the image.
 pub(super) fn estimate_spread(
     sampler: &Sampler,
     curve: &SplineCurve,
     kind: Kind,
 ) -> Option<psf::EdgeSpread> {
+    // An open curve that crosses the image border: the stretch whose band
+    // fits (see `trim_to_band`).
+    let within = |half_width: f64| {
+        let clip = Clip {
+            half_width,
+            margin: TRIM_MARGIN,
+            width: sampler.width(),
+            height: sampler.height(),
+        };
+        trim_to_band(curve, clip).ok().map(|(stretch, _)| stretch)
+    };
     if kind == Kind::Contour {
-        return line_spread(sampler, curve);
+        return line_spread(sampler, within);
     }
-    let first = psf::edge_spread(sampler, curve, EDGE_SPREAD_BAND)?;
+    let first = psf::edge_spread(sampler, &within(EDGE_SPREAD_BAND)?, EDGE_SPREAD_BAND)?;
     if first.sigma < 0.9 * EDGE_SPREAD_BAND / 3.0 {
         return Some(first);
     }
-    psf::edge_spread(sampler, curve, 4.0 * first.sigma).or(Some(first))
+    let wide = 4.0 * first.sigma;
+    within(wide)
+        .and_then(|stretch| psf::edge_spread(sampler, &stretch, wide))
+        .or(Some(first))
 }
 
 /// [`psf::line_spread`] on a band wide enough for the line: its search
@@ -71,16 +87,21 @@ pub(super) fn estimate_spread(
 /// blur's curvature shift of too small a blur: on a ring of radius 150 px,
 /// 2.5 px wide and blurred by 4 px, the 8-px band's blur bound of 2.7 px
 /// left a bias of -3e-2 px.
-fn line_spread(sampler: &Sampler, curve: &SplineCurve) -> Option<psf::EdgeSpread> {
+/// `within(R)`: the stretch of the curve whose band of half-width `R` fits
+/// in the image.
+fn line_spread(
+    sampler: &Sampler,
+    within: impl Fn(f64) -> Option<SplineCurve>,
+) -> Option<psf::EdgeSpread> {
     let mut band = EDGE_SPREAD_BAND;
-    let mut e = psf::line_spread(sampler, curve, band)?;
+    let mut e = psf::line_spread(sampler, &within(band)?, band)?;
     for _ in 0..LINE_SPREAD_WIDENINGS {
         let width = e.line_width.unwrap_or(0.0);
         if e.sigma < 0.9 * band / 3.0 && width < 0.9 * band {
             break;
         }
         band = (matched_band(&e) + e.sigma).max(1.5 * band);
-        match psf::line_spread(sampler, curve, band) {
+        match within(band).and_then(|stretch| psf::line_spread(sampler, &stretch, band)) {
             Some(wider) => e = wider,
             None => break,
         }

@@ -56,6 +56,7 @@ mod track;
 pub use crate::correlation::levels::{self, LevelModel};
 pub use crate::measurement::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
+    Trim, TrimReason, TrimmedEnd,
 };
 pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
 pub use track::{

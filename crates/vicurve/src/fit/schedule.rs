@@ -10,11 +10,12 @@ use super::blur::{
 };
 use super::loops;
 use super::output::{plain_samples, Final, Output};
-use super::reference::{next_reference, Clip, CURVE_SPACING};
+use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
 use super::{
-    breaks, default_stages, Elements, FitConfig, Measurement, Outcome, Stage, StageReport,
+    breaks, default_stages, Elements, FitConfig, Measurement, Outcome, Sample, Stage, StageReport,
+    Trim, TrimReason, TrimmedEnd,
 };
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
@@ -95,6 +96,13 @@ pub(super) struct Schedule<'s> {
     pub track_margin: f64,
     /// The current reference curve.
     pub current: SplineCurve,
+    /// When `current` is an open curve trimmed to the stretch whose band
+    /// fits in the image: the whole curve it was cut from, and the parts
+    /// cut off (carried to the next reference).
+    pub trimmed: Option<(SplineCurve, Ends)>,
+    /// The parts cut off the last completed stage's reference: where the
+    /// result stops short of the curve it was measured from.
+    pub final_ends: Ends,
     /// Tracking: the band the previous frame left, when it serves this one.
     pub reuse: Option<Box<track::Kept>>,
     /// Tracking: where the previous frame's curve is on the current band
@@ -140,6 +148,7 @@ impl<'s> Schedule<'s> {
         };
         let min_el = if closed { config.degree + 1 } else { 1 };
         let mut current = breaks::prepare(reference, &config.breaks)?;
+        check_open_start(&current, (sampler.width(), sampler.height()))?;
         let reuse = match (tracked, cache.as_deref_mut()) {
             (Some(t), Some(c)) => c.take_for(&t, config.levels, sampler, config.coords),
             _ => None,
@@ -151,12 +160,7 @@ impl<'s> Schedule<'s> {
             // A kept band's reference was refitted when the band was built.
             (Some(_), Some(kept)) => current = kept.reference.clone(),
             (Some(t), None) => {
-                let clip = Clip {
-                    half_width: t.stage().half_width + track_margin,
-                    width: sampler.width(),
-                    height: sampler.height(),
-                };
-                current = tracked_reference(&current, &t.stage(), &config, min_el, clip)?;
+                current = tracked_reference(&current, &t.stage(), &config, min_el)?;
             }
             (None, _) => {}
         }
@@ -168,6 +172,8 @@ impl<'s> Schedule<'s> {
             min_el,
             track_margin,
             current,
+            trimmed: None,
+            final_ends: Ends::default(),
             reuse,
             run_start: None,
             moved_before: None,
@@ -300,9 +306,11 @@ impl<'s> Schedule<'s> {
                 curve: self.current,
                 stages: self.reports,
                 skipped: self.skipped,
+                trim: Trim::default(),
                 levels: Vec::new(),
             });
         };
+        let ends = [0.0, fin.reference.param_length()].map(|u| fin.reference.point(u));
         // The blur's curvature shift: removed when the edge (or line) looks
         // like a blurred step (or bar) and the last band is not much
         // narrower than it (a narrow band sees only the middle of a wide
@@ -330,6 +338,7 @@ impl<'s> Schedule<'s> {
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
         }
+        let trim = trim_report(&self.final_ends, ends, &samples);
         Ok(Measurement {
             outcome: self.outcome,
             curve,
@@ -337,6 +346,7 @@ impl<'s> Schedule<'s> {
             samples,
             stages: self.reports,
             skipped: self.skipped,
+            trim,
             edge_spread: self.edge_spread,
             blur_corrected: blur.is_some() || pixel_edge_result,
             levels,
@@ -389,6 +399,29 @@ impl<'s> Schedule<'s> {
     }
 }
 
+/// Where the measured `samples` stop short of the curve they were measured
+/// from: at the ends where the last stage's reference was trimmed
+/// (`ends`, the parts cut off; `joints`, the reference's end points).
+fn trim_report(ends: &Ends, joints: [[f64; 2]; 2], samples: &[Sample]) -> Trim {
+    let end = |start: bool, sample: Option<&Sample>| {
+        let removed = ends.length(start, joints[usize::from(!start)]);
+        match sample {
+            Some(s) if removed > 0.0 => Some(TrimmedEnd {
+                x: s.x,
+                y: s.y,
+                removed,
+                half_width: ends.reach,
+                reason: TrimReason::BandLeavesImage,
+            }),
+            _ => None,
+        }
+    };
+    Trim {
+        start: end(true, samples.first()),
+        end: end(false, samples.last()),
+    }
+}
+
 /// A tracked frame's reference: the previous frame's curve refitted with
 /// control points one element of the tracking stage apart, as a settle's
 /// would be (a tracked frame's run does not settle, see
@@ -400,11 +433,10 @@ fn tracked_reference(
     stage: &Stage,
     config: &FitConfig,
     min_el: usize,
-    clip: Clip,
 ) -> Result<SplineCurve> {
     let n = stage.element_count(previous.param_length(), min_el);
     let basis = breaks::displacement_basis(previous, config.degree, n)?;
     let spacing = basis.element_length().max(CURVE_SPACING);
     let zero = vec![0.0; basis.n_functions()];
-    next_reference(previous, &basis, &zero, spacing, clip)
+    next_reference(previous, &basis, &zero, spacing, &Ends::default(), (0, 0))
 }

@@ -14,7 +14,9 @@
 use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
 use super::loops;
 use super::output::Final;
-use super::reference::{next_reference, reference_spacing, Clip, CURVE_SPACING};
+use super::reference::{
+    next_reference, reference_spacing, trim_to_band, Clip, Ends, CURVE_SPACING, TRIM_MARGIN,
+};
 use super::refine::{refine, Fitted, RefineBand};
 use super::robust::{robust_refit, RobustFit};
 use super::run::{iterate_to_end, largest_change, Run, RunLimits, RunLog};
@@ -57,6 +59,14 @@ const MAX_SETTLES: usize = 4;
 /// settle's result moves by a few percent of the reference's error, the
 /// error [`SETTLE_TOLERANCE`] accepts of the settles themselves.
 const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
+/// Extra distance from the border of a trimmed band whose profile is
+/// pulled (the image sampled at the pixels displaced by `U`), pixels: a
+/// fine stage's `U` stays under it, so its displaced pixels stay in the
+/// image; a coarse stage's may not (a pixel displaced out of the image
+/// counts as fitting exactly, as long as few do), but a coarse stage only
+/// brings the curve near the edge. Its trimmed ends are then within
+/// `R + PULLED_MARGIN + TRIM_MARGIN` of the border.
+const PULLED_MARGIN: f64 = 1.0;
 /// Iteration records reserved per stage at most (see
 /// [`StageReport::history`]): the loop pushes without allocating up to here.
 const HISTORY_RESERVE: usize = 1024;
@@ -72,8 +82,6 @@ pub(super) struct StageState {
     /// Whether a pixel-edge stage will follow it (a silhouette's stage
     /// then leaves the settling to that one).
     followed: bool,
-    /// An open curve's new references keep their band inside the image.
-    clip: Clip,
     /// When the stage started.
     started: Instant,
     /// Iterations so far.
@@ -188,7 +196,6 @@ impl Schedule<'_> {
     /// Run `stage` (`is_last`: the schedule's last so far) until it
     /// completes, is skipped or fails.
     pub(super) fn run_stage(&mut self, stage: &Stage, is_last: bool) -> Result<Flow> {
-        let r = stage.half_width;
         let config = &self.config;
         let mut st = StageState {
             stage: *stage,
@@ -197,11 +204,6 @@ impl Schedule<'_> {
             followed: config.kind == Kind::Silhouette
                 && config.blur_correction
                 && !self.matched_added,
-            clip: Clip {
-                half_width: r,
-                width: self.sampler.width(),
-                height: self.sampler.height(),
-            },
             started: Instant::now(),
             iterations: 0,
             rereferences: 0,
@@ -312,11 +314,19 @@ impl Schedule<'_> {
                 kept: Some((lambda, velocity)),
             }));
         }
+        // An open curve measures the stretch whose band fits in the image.
+        let trimmed = self.trim_reference(st.stage.half_width, pushed);
         let length = self.current.param_length();
         let n_elements = st
             .fixed_elements
             .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
         let basis = breaks::displacement_basis(&self.current, self.config.degree, n_elements)?;
+        if let Err(e) = trimmed {
+            let first_band = self.last.is_none() && st.iterations == 0;
+            return self
+                .band_outside(st, e, (profile, &basis), first_band)
+                .map(Err);
+        }
         Ok(self
             .build_system(st, &basis, profile, pushed)?
             .map(|(corr, band_pixels)| Acquired {
@@ -420,10 +430,7 @@ impl Schedule<'_> {
         // the pixels around the edge whatever the reference (see
         // `track::TRACK_MARGIN`); where that band does not fit in the
         // image, the plain one settles as the full schedule does.
-        let margin = match (self.tracked, pushed) {
-            (Some(_), Some(_)) => self.track_margin,
-            _ => 0.0,
-        };
+        let margin = self.band_margin(pushed);
         let (width, height) = (self.sampler.width(), self.sampler.height());
         let coords = self.config.coords;
         let current = &self.current;
@@ -464,6 +471,74 @@ impl Schedule<'_> {
                 Ok(Err(Flow::Stop))
             }
         }
+    }
+
+    /// The margin of a run's band beyond its half-width, pixels: a tracked
+    /// frame's pixel-edge band has one, so that its one run counts the
+    /// pixels around the edge whatever the reference (see
+    /// `track::TRACK_MARGIN`).
+    fn band_margin(&self, pushed: Option<Profile>) -> f64 {
+        match (self.tracked, pushed) {
+            (Some(_), Some(_)) => self.track_margin,
+            _ => 0.0,
+        }
+    }
+
+    /// An open reference trimmed to the stretch whose band of half-width
+    /// `r` (and margin, for the `pushed` profile of a tracked frame) fits in
+    /// the image (from the whole curve it was cut from, if it was already
+    /// trimmed: a trim is for one run); the parts cut off are kept for its
+    /// next reference ([`next_reference`]). A closed curve, or one whose
+    /// band fits whole, stays as it is.
+    ///
+    /// A pulled profile samples the image at the band's pixels displaced
+    /// by `U`: its band keeps up to [`PULLED_MARGIN`] further from the
+    /// border (a pushed profile reads the pixels themselves).
+    ///
+    /// Errors: those of [`trim_to_band`] (the reference is then unchanged).
+    fn trim_reference(&mut self, r: f64, pushed: Option<Profile>) -> Result<()> {
+        let pulled = if pushed.is_some() {
+            0.0
+        } else {
+            (self.config.rereference_fraction * r).min(PULLED_MARGIN)
+        };
+        let clip = Clip {
+            half_width: r + self.band_margin(pushed),
+            margin: TRIM_MARGIN + pulled,
+            width: self.sampler.width(),
+            height: self.sampler.height(),
+        };
+        let full = self.trimmed.as_ref().map_or(&self.current, |t| &t.0);
+        let (stretch, ends) = trim_to_band(full, clip)?;
+        let previous = self.trimmed.take().map(|t| t.0);
+        if ends.is_empty() {
+            if let Some(full) = previous {
+                self.current = full;
+            }
+        } else {
+            let full = std::mem::replace(&mut self.current, stretch);
+            self.trimmed = Some((previous.unwrap_or(full), ends));
+        }
+        Ok(())
+    }
+
+    /// The reference after a run that moved the current one by `lambda` on
+    /// `basis` (control points `spacing` apart): with the parts a trim cut
+    /// off carried along ([`next_reference`]); and those parts, which the
+    /// run's result lacks.
+    fn new_reference(
+        &mut self,
+        basis: &Basis,
+        lambda: &[f64],
+        spacing: f64,
+    ) -> Result<std::result::Result<(SplineCurve, Ends), Divergence>> {
+        let ends = self.trimmed.take().map(|t| t.1).unwrap_or_default();
+        let size = (self.sampler.width(), self.sampler.height());
+        let next = next_reference(&self.current, basis, lambda, spacing, &ends, size)?;
+        Ok(match loops::curve_loops(&next) {
+            Some(looped) => Err(looped),
+            None => Ok((next, ends)),
+        })
     }
 
     /// How the stage ends when its band leaves the image (`e`): an error on
@@ -568,7 +643,7 @@ impl Schedule<'_> {
         lambda: &[f64],
         spacing: f64,
     ) -> Result<Option<Divergence>> {
-        let next = match checked_reference(&self.current, basis, lambda, spacing, st.clip)? {
+        let (next, _) = match self.new_reference(basis, lambda, spacing)? {
             Ok(next) => next,
             Err(looped) => return Ok(Some(looped)),
         };
@@ -706,11 +781,19 @@ impl Schedule<'_> {
         o: Outcome,
     ) -> Result<Next> {
         let next = if self.tracked.is_some() && st.is_last {
+            self.final_ends = self
+                .trimmed
+                .as_ref()
+                .map(|t| t.1.clone())
+                .unwrap_or_default();
             None
         } else {
             let spacing = reference_spacing(corr.basis());
-            match checked_reference(&self.current, corr.basis(), &lambda, spacing, st.clip)? {
-                Ok(next) => Some(next),
+            match self.new_reference(corr.basis(), &lambda, spacing)? {
+                Ok((next, ends)) => {
+                    self.final_ends = ends;
+                    Some(next)
+                }
                 Err(looped) => {
                     return Ok(self.diverge(st, looped, (profile, corr.basis(), band_pixels)))
                 }
@@ -837,20 +920,4 @@ impl Schedule<'_> {
         st.previous_move = if again { f64::INFINITY } else { moved };
         settle
     }
-}
-
-/// [`next_reference`], or how it loops: the new curve crosses itself, or
-/// turns more (or less) than once round ([`loops`]).
-fn checked_reference(
-    reference: &SplineCurve,
-    basis: &Basis,
-    lambda: &[f64],
-    spacing: f64,
-    clip: Clip,
-) -> Result<std::result::Result<SplineCurve, Divergence>> {
-    let next = next_reference(reference, basis, lambda, spacing, clip)?;
-    Ok(match loops::curve_loops(&next) {
-        Some(looped) => Err(looped),
-        None => Ok(next),
-    })
 }
