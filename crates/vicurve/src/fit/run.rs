@@ -25,6 +25,9 @@ pub(super) enum Run {
     IterationLimit,
     /// `max |U|` passed the re-referencing limit.
     Rereference,
+    /// A step longer than [`RunLimits::lost`] (not applied): the band does
+    /// not see the edge somewhere.
+    Lost,
     /// A step could not be made.
     Failed(Divergence),
 }
@@ -42,6 +45,9 @@ pub(super) struct RunLimits {
     /// Band half-width, pixels: a step is capped at
     /// [`FitConfig::max_step_fraction`] of it.
     pub half_width: f64,
+    /// A step (before any cap) longer than this, pixels, ends the run
+    /// without being applied ([`Run::Lost`]); infinite for none.
+    pub lost: f64,
 }
 
 impl RunLimits {
@@ -54,6 +60,7 @@ impl RunLimits {
             tolerance: config.tolerance,
             rereference: f64::INFINITY,
             half_width,
+            lost: f64::INFINITY,
         }
     }
 }
@@ -109,6 +116,9 @@ pub(super) fn iterate_to_end(
             new_reference: kind == RunKind::Reference && used == 0,
         });
         used += 1;
+        if s.max_step > limits.lost {
+            return (Run::Lost, used);
+        }
         *step = Some(s);
         let omega = relax.factor(corr.delta());
         let scale = omega

@@ -111,6 +111,11 @@ pub(super) struct StageState {
     tilt: Option<MeasuredTilt>,
     /// The largest displacement of the run before this one, pixels.
     previous_move: f64,
+    /// Whether the band lost the edge: a step of a run with varying levels
+    /// was longer than the band's half-width, which happens where the band
+    /// sees no edge (see [`Schedule::limits`]). The runs then fit the
+    /// global pair of levels, re-referencing, until one converges.
+    far: bool,
     /// The stage's iterations.
     history: Vec<IterationRecord>,
 }
@@ -217,6 +222,7 @@ impl Schedule<'_> {
             stage_noise: None,
             tilt: None,
             previous_move: f64::INFINITY,
+            far: false,
             history: Vec::with_capacity(config.max_iterations.min(HISTORY_RESERVE)),
         };
         loop {
@@ -357,11 +363,33 @@ impl Schedule<'_> {
         } else {
             self.config.rereference_fraction * r
         };
+        // Where the band sees no edge (the start is farther than `R` from
+        // it there), the varying levels' contrast there is noise, and so is
+        // the displacement they give: steps of hundreds of pixels in either
+        // direction. Capped, they steer the whole curve by them (the cap
+        // scales the step), and the curve walks at random and loops
+        // (issue 18). Such a step is not applied: the runs fit the global
+        // pair instead, the edge's levels where the band sees it, which
+        // moves the rest of the curve towards the edge ([`StageState::far`]).
+        // Closed curves only: an open curve's end coefficients, whose basis
+        // functions barely reach into the curve, take long raw steps while
+        // the curve hardly moves (a trimmed end at the border), and would
+        // pass for a lost band.
+        let lost = if self.tracked.is_none()
+            && !st.far
+            && corr.varying_levels()
+            && self.current.is_closed()
+        {
+            r
+        } else {
+            f64::INFINITY
+        };
         let limits = RunLimits {
             budget: self.config.max_iterations.saturating_sub(st.iterations),
             tolerance,
             rereference,
             half_width: r,
+            lost,
         };
         (limits, windowed)
     }
@@ -378,6 +406,23 @@ impl Schedule<'_> {
         let r = st.stage.half_width;
         match end {
             Run::Rereference => {
+                let spacing = reference_spacing(system.corr.basis());
+                match self.move_reference(st, system.corr.basis(), &lambda, spacing)? {
+                    None => Ok(Next::Again),
+                    Some(looped) => {
+                        let system = (system.profile, system.corr.basis(), system.band_pixels);
+                        Ok(self.diverge(st, looped, system))
+                    }
+                }
+            }
+            Run::Lost => {
+                st.far = true;
+                Ok(Next::Again)
+            }
+            // The edge found everywhere: on from there with the levels of
+            // the configuration.
+            Run::Converged if st.far => {
+                st.far = false;
                 let spacing = reference_spacing(system.corr.basis());
                 match self.move_reference(st, system.corr.basis(), &lambda, spacing)? {
                     None => Ok(Next::Again),
@@ -451,13 +496,13 @@ impl Schedule<'_> {
             Err(e) => return Err(e),
         };
         let band_pixels = band.len();
-        let prepared = Correlation::prepare(
-            band,
-            basis.clone(),
-            self.sampler,
-            self.config.levels,
-            st.tilt.as_ref(),
-        );
+        let levels = if st.far {
+            LevelModel::Global
+        } else {
+            self.config.levels
+        };
+        let prepared =
+            Correlation::prepare(band, basis.clone(), self.sampler, levels, st.tilt.as_ref());
         match prepared {
             Ok(c) => Ok(Ok((c, band_pixels))),
             Err(e) if first_band => Err(e),
@@ -836,6 +881,7 @@ impl Schedule<'_> {
             tolerance,
             rereference: f64::INFINITY,
             half_width: st.stage.half_width,
+            lost: f64::INFINITY,
         };
         let (end, used) = iterate_to_end(
             &mut global,
