@@ -17,8 +17,9 @@
 //!    smoothed by a moving average and returned as a closed polyline; for a
 //!    region touching the border, the longest stretch of boundary at least
 //!    `OPEN_END_MARGIN` px from the border is returned as an open polyline
-//!    (the border itself is not an edge of the object, and the margin leaves
-//!    room for the first, widest band).
+//!    (the border itself is not an edge of the object; the fit trims the
+//!    curve where each stage's band would leave the image, so the start
+//!    reaches as close to the border as the tracing allows).
 //!
 //! The start lies within about a pixel of the thresholded edge, well inside
 //! the reach of the default schedule's first band (20 px). Holes in the
@@ -55,8 +56,9 @@ use threshold::Rect;
 /// Regions smaller than this many pixels are not silhouettes (specks).
 const MIN_REGION_PIXELS: usize = 50;
 /// An open start keeps this far (pixels) from the search rectangle's
-/// border: the default first band is 20 px wide on each side.
-const OPEN_END_MARGIN: f64 = 25.0;
+/// border: enough to leave out the boundary pixels that run along the
+/// border itself (and the smoothing's few pixels at the ends).
+const OPEN_END_MARGIN: f64 = 3.0;
 /// Boundary pixels averaged on each side of a point (the staircase of a
 /// traced boundary is smoothed to about a tenth of a pixel).
 const SMOOTH_HALF_WINDOW: usize = 3;
