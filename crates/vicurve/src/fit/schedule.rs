@@ -14,8 +14,8 @@ use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
 use super::{
-    breaks, default_stages, Elements, FitConfig, Measurement, Outcome, Sample, Stage, StageReport,
-    Trim, TrimReason, TrimmedEnd,
+    breaks, default_stages, Divergence, Elements, FitConfig, Measurement, Outcome, Sample, Stage,
+    StageReport, Trim, TrimReason, TrimmedEnd,
 };
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
@@ -335,6 +335,7 @@ impl<'s> Schedule<'s> {
             blur,
         )?;
         self.check_loops(&samples, curve.is_closed());
+        self.check_contrast();
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
         }
@@ -363,6 +364,28 @@ impl<'s> Schedule<'s> {
         let points: Vec<[f64; 2]> = samples.iter().map(|s| [s.x, s.y]).collect();
         if let Some(divergence) = loops::looped(&points, closed) {
             self.outcome = Outcome::Diverged { divergence };
+            if let Some(last) = self.reports.last_mut() {
+                last.outcome = self.outcome;
+            }
+        }
+    }
+
+    /// A result whose contrast is a small fraction of the image's gray-level
+    /// range ([`MIN_CONTRAST_FRACTION`]) measured no edge: the curve
+    /// wandered on a plateau (a start that never came within a band of the
+    /// edge), chasing noise; a divergence, not a result. Not for tracked
+    /// frames, which start from a measured curve.
+    fn check_contrast(&mut self) {
+        if matches!(self.outcome, Outcome::Diverged { .. }) || self.tracked.is_some() {
+            return;
+        }
+        let Some(c) = self.reports.last().map(|r| r.c.abs()) else {
+            return;
+        };
+        if c < MIN_CONTRAST_FRACTION * gray_range(self.sampler) {
+            self.outcome = Outcome::Diverged {
+                divergence: Divergence::NoContrast,
+            };
             if let Some(last) = self.reports.last_mut() {
                 last.outcome = self.outcome;
             }
@@ -439,4 +462,28 @@ fn tracked_reference(
     let spacing = basis.element_length().max(CURVE_SPACING);
     let zero = vec![0.0; basis.n_functions()];
     next_reference(previous, &basis, &zero, spacing, &Ends::default(), (0, 0))
+}
+
+/// The contrast a measured edge or line must reach at least, as a fraction
+/// of the image's gray-level range ([`gray_range`]). A wandering curve's
+/// fitted contrast is that of the noise it chased: under 1 % of the range
+/// at 1 % noise; a faint but real edge stands well above 2 %.
+const MIN_CONTRAST_FRACTION: f64 = 0.02;
+
+/// The image's gray-level range: the 99.5th minus the 0.5th percentile of
+/// a regular subsample of at most about 65,536 pixels (robust to hot
+/// pixels and specks).
+fn gray_range(sampler: &Sampler) -> f64 {
+    let (w, h) = (sampler.width(), sampler.height());
+    let stride = ((w * h) / 65_536).max(1);
+    let mut values: Vec<f64> = (0..w * h)
+        .step_by(stride)
+        .filter_map(|k| sampler.pixel(k % w, k / w))
+        .collect();
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+    at(0.995) - at(0.005)
 }

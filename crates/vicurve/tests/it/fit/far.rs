@@ -111,3 +111,31 @@ fn a_start_that_crosses_itself_diverges() {
         m.outcome
     );
 }
+
+/// A circle well inside a disc, never crossing its edge (120 px inside a
+/// disc of radius 150): the band sees the edge nowhere and the curve
+/// wanders on the plateau, chasing noise. Its fitted contrast is a fraction
+/// of a percent of the image's range: a divergence (no contrast), not a
+/// result 116 px off reported as converged.
+#[test]
+fn a_start_that_never_reaches_the_edge_diverges() {
+    let spec = disc(400, (200.3, 199.8, 150.0), 1.5, 0.01, 2, Some(8));
+    let image = render(&spec).expect("render");
+    let init = InitialCurve::Circle {
+        cx: 200.3,
+        cy: 199.8,
+        r: 30.0,
+    };
+    let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+    println!("a circle 120 px inside a disc: {}", m.outcome);
+    assert!(
+        matches!(
+            m.outcome,
+            Outcome::Diverged {
+                divergence: Divergence::NoContrast
+            }
+        ),
+        "{}",
+        m.outcome
+    );
+}
