@@ -33,6 +33,11 @@ pub struct ConformanceArgs {
     /// Run only the cases whose id contains this text.
     #[arg(long, value_name = "SUBSTR")]
     filter: Option<String>,
+    /// Also write each measured case's samples with their signed error to
+    /// the truth (`OUT/samples/ID.csv`, the id's `/` as `_`), to see where
+    /// a case fails.
+    #[arg(long)]
+    samples: bool,
 }
 
 /// Run the sweep and write its outputs.
@@ -44,7 +49,12 @@ pub fn conformance(args: &ConformanceArgs) -> Result<(), Failure> {
     if cases.is_empty() {
         return Err(Failure::Error("no case matches --filter".into()));
     }
-    let rows = run_all(&cases)?;
+    let samples = args.samples.then(|| out.join("samples"));
+    if let Some(dir) = &samples {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let rows = run_all(&cases, samples.as_deref())?;
     write(&out.join("conformance.csv"), &report::csv(&rows))?;
     write(
         &out.join("conformance.md"),
@@ -82,7 +92,7 @@ fn command_line(args: &ConformanceArgs) -> String {
 /// Every case, in order: the images are measured in parallel (rayon's
 /// threads), each rendered once for all the cases on it, which run one
 /// after the other.
-fn run_all(cases: &[Case]) -> Result<Vec<Row>, Failure> {
+fn run_all(cases: &[Case], samples: Option<&std::path::Path>) -> Result<Vec<Row>, Failure> {
     let bar = ProgressBar::new(cases.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} (ETA {eta})")
@@ -93,7 +103,7 @@ fn run_all(cases: &[Case]) -> Result<Vec<Row>, Failure> {
         .par_iter()
         .map(|group| {
             bar.set_message(group[0].image.id.clone());
-            let rows = run_image(group);
+            let rows = run_image(group, samples);
             bar.inc(group.len() as u64);
             rows
         })
@@ -115,8 +125,9 @@ fn by_image(cases: &[Case]) -> Vec<&[Case]> {
     groups
 }
 
-/// Render the image of `group` and run each of its cases on it.
-fn run_image(group: &[Case]) -> Vec<Row> {
+/// Render the image of `group` and run each of its cases on it (writing
+/// each case's samples into `samples` when given).
+fn run_image(group: &[Case], samples: Option<&std::path::Path>) -> Vec<Row> {
     let image: Result<Image, String> =
         vicurve::render::render(&group[0].image.spec).map_err(|e| e.to_string());
     group
@@ -129,7 +140,14 @@ fn run_image(group: &[Case]) -> Vec<Row> {
                     seconds: 0.0,
                 },
             };
-            score::score(case, &ran)
+            let row = score::score(case, &ran);
+            if let (Some(dir), run::Ran::Measured { m, .. }) = (samples, &ran) {
+                let path = dir.join(format!("{}.csv", case.id.replace('/', "_")));
+                if let Err(e) = std::fs::write(&path, score::samples_csv(case, m)) {
+                    eprintln!("cannot write {}: {e}", path.display());
+                }
+            }
+            row
         })
         .collect()
 }

@@ -127,6 +127,27 @@ pub fn score(case: &Case, ran: &Ran) -> Row {
     row(case, outcome, message, fig, seconds)
 }
 
+/// The samples of `m` with their signed normal distance to the truth of
+/// `case` (px), as CSV: `s,x,y,error,sigma,sigma_noise,misfit,weight`.
+pub fn samples_csv(case: &Case, m: &Measurement) -> String {
+    let shape = &case.image.spec.shape;
+    let mut out = String::from("s,x,y,error,sigma,sigma_noise,misfit,weight\n");
+    for q in &m.samples {
+        out.push_str(&format!(
+            "{},{},{},{:e},{:e},{:e},{},{}\n",
+            q.s,
+            q.x,
+            q.y,
+            shape.signed_distance(q.x, q.y),
+            q.sigma,
+            q.sigma_noise,
+            u8::from(q.misfit),
+            q.weight
+        ));
+    }
+    out
+}
+
 fn outcome_text(o: &Outcome) -> (&'static str, String) {
     match o {
         Outcome::Converged => ("converged", String::new()),
