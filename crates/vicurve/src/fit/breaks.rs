@@ -402,8 +402,10 @@ fn fill_gaps(
         if !(corner || next_corner) {
             continue;
         }
+        // At most `step` apart, as the pieces' points are (the output
+        // keeps every n-th point by the largest chord).
         let gap = (q[0] - p[0]).hypot(q[1] - p[1]);
-        let fill = (gap / step).floor() as usize;
+        let fill = (gap / step).ceil() as usize;
         let c = if corner { u } else { seq[(i + 1) % n].0 };
         for k in 1..fill {
             let t = k as f64 / fill as f64;
