@@ -4,12 +4,15 @@
 //! stage's result:
 //!
 //! - **Residuals.** The band pixels whose foot lies near a sample ask for
-//!   an extra displacement `d` ([`crate::correlation`]'s residual bins, 1
-//!   px long). Under noise alone `A d^2` (`A` the bin's information) has
-//!   mean `sigma_n^2` in each bin; over the bins within half an element of
-//!   the sample, the excess of `sum A d^2` over `n sigma_n^2`, when it
-//!   exceeds the noise's chi-square spread, gives the misfit's mean square
-//!   displacement `(sum A d^2 - n sigma_n^2) / sum A`.
+//!   an extra displacement ([`crate::correlation`]'s residual bins, 1 px
+//!   long). Over the bins within a quarter element on each side of the
+//!   sample, the window's request `d = sum p / sum A` (`p` a bin's
+//!   projected residual, `A` its information) has variance `sigma_n^2 /
+//!   sum A` under noise alone; beyond `REQUEST_SIGNIFICANCE` of its
+//!   standard deviations, `|d|` is the misfit there. The window's sum
+//!   averages out requests that alternate within it (a pixel grid's
+//!   aliasing), which do not move the curve: a chi-square of the single
+//!   bins' requests takes them for misfit.
 //! - **Oscillation.** A curve that oscillates at its elements' scale (a
 //!   feedback through the blur's curvature term, a spline chasing
 //!   detail the image cannot resolve) leaves no residual: the model's image
