@@ -21,16 +21,42 @@
 //! exponential (`normal_cdf_pdf`; `erfc` from `libm` would spend two more),
 //! builds that table and is the tests' reference.
 //!
-//! Edge cases: an axis-aligned edge (`nx` or `ny` zero) is a limit of the
-//! formula (0/0); widths are raised to 0.02 px and the blur to 0.03 px,
-//! which moves the profile by under 1e-4 of the contrast.
+//! Edge cases: an axis-aligned edge (`nx` or `ny` zero) or a focused one
+//! (no blur) is a limit of the formula (0/0); widths and the blur are raised
+//! to 1e-3 px (widths to 5 % of a larger blur, at most 0.02 px: see
+//! [`MIN_WIDTH`]), which moves a focused edge's profile by at most 4e-4 of
+//! the contrast at a
+//! pixel whose centre lies within 1e-3 px of a corner of the trapezoid
+//! (about 1e-5 RMS over the band; 1e-6 for a diagonal edge). The floors
+//! must stay that small: the profile is exact coverage, and at 0.03 px of
+//! blur it differed from the coverage of a focused edge by up to 1.2 % of
+//! the contrast, 0.5 px from the edge (1e-3 RMS over the band): on a
+//! noiseless 16-bit disc that misfit, not the image, limited the scatter
+//! of a free-form curve (docs/benchmarks.md).
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
-/// Smallest trapezoid width used, pixels (see the module docs).
-const MIN_WIDTH: f64 = 0.02;
+/// Smallest trapezoid width used, pixels (see the module docs): the larger
+/// of this and `WIDTH_PER_BLUR` times the blur, up to `MAX_WIDTH_FLOOR`.
+const MIN_WIDTH: f64 = 1e-3;
+/// See [`MIN_WIDTH`]. The profile is a second difference of `Psi2` over the
+/// widths, scaled by `blur^2 / (a b)`: a floor that follows the blur keeps
+/// that factor, and so the table's error, bounded (at most 8 up to 0.4 px of
+/// blur, `50 blur^2` beyond), while a width that small against the blur
+/// changes the profile by under 1e-4 of its variance.
+const WIDTH_PER_BLUR: f64 = 0.05;
+/// See [`MIN_WIDTH`], pixels.
+const MAX_WIDTH_FLOOR: f64 = 0.02;
+
+/// The trapezoid's widths `(a, b)` for the normal `(nx, ny)` under the blur
+/// `s` (at least `MIN_BLUR`), raised to the floor of [`MIN_WIDTH`].
+#[inline]
+fn widths(nx: f64, ny: f64, s: f64) -> (f64, f64) {
+    let floor = (WIDTH_PER_BLUR * s).clamp(MIN_WIDTH, MAX_WIDTH_FLOOR);
+    (nx.abs().max(floor), ny.abs().max(floor))
+}
 /// Smallest blur used, pixels: a smaller one gives the same profile.
-pub(crate) const MIN_BLUR: f64 = 0.03;
+pub(crate) const MIN_BLUR: f64 = 1e-3;
 
 /// Standard normal distribution function (the reference for
 /// [`normal_cdf_pdf`]).
@@ -140,9 +166,8 @@ const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 /// `1e-9 (1 + sigma_b^2)` of the direct formula (tested).
 #[inline]
 pub fn pixel_edge_cdf(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
-    let a = nx.abs().max(MIN_WIDTH);
-    let b = ny.abs().max(MIN_WIDTH);
     let s = sigma_b.max(MIN_BLUR);
+    let (a, b) = widths(nx, ny, s);
     let reach = 0.5 * (a + b) + 9.0 * s;
     if t >= reach {
         return (1.0, 0.0);
@@ -167,9 +192,8 @@ pub fn pixel_edge_cdf(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
 /// the reference for the tabulated one.
 #[cfg(test)]
 fn pixel_edge_cdf_direct(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
-    let a = nx.abs().max(MIN_WIDTH);
-    let b = ny.abs().max(MIN_WIDTH);
     let s = sigma_b.max(MIN_BLUR);
+    let (a, b) = widths(nx, ny, s);
     let reach = 0.5 * (a + b) + 9.0 * s;
     if t >= reach {
         return (1.0, 0.0);
