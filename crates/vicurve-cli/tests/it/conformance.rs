@@ -13,10 +13,6 @@ use std::collections::HashMap;
 /// land); a new failure is a regression, not an entry.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
-        "disc/blur4/noise0/16bit/dark/auto",
-        "scatter/sigma 0.31",
-    ),
-    (
         "disc/blur0/noise0/8bit/bright/circle-1.5px",
         "scatter/sigma 0.62",
     ),

@@ -190,3 +190,37 @@ fn a_thin_line_blurred_by_more_than_its_width() {
         assert!(e.scatter <= max_scatter, "noise {noise}: {e:?}");
     }
 }
+
+/// An edge blurred by 4 px is wider than a third of the first band the
+/// spread is estimated on, and than a third of a band four times that
+/// bound: the estimate widens its band until it is off the bound, so that
+/// with explicit stages (no pixel-edge stage) the curvature shift removed
+/// is the blur's: the bound of one widening, 3.56 px, left a disc of
+/// radius 150 px 1.2e-2 px inside (within the 5e-3 px now; on a
+/// radius of 70 px the first-order shift itself is off by 9e-3 px at this
+/// blur, so the disc is large).
+#[test]
+fn the_spread_of_a_heavily_blurred_edge_is_not_bounded_by_its_band() {
+    let spec = disc(400, (200.37, 199.71, 150.0), 4.0, 0.0, 0, Some(8));
+    let image = render(&spec).unwrap();
+    let init = InitialCurve::Circle {
+        cx: 201.0,
+        cy: 199.0,
+        r: 151.5,
+    };
+    let config = FitConfig {
+        stages: Some(vicurve::fit::parse_stages("10:40").unwrap()),
+        ..FitConfig::default()
+    };
+    let m = measure(&image, &init, &config).unwrap();
+    let e = evaluate(&m.points(), &spec.shape).unwrap();
+    let spread = m.edge_spread.unwrap().sigma;
+    let expect = (16.0f64 + 1.0 / 12.0).sqrt();
+    println!(
+        "blur 4: spread {spread:.4} (expected {expect:.4}), bias {:+.2e}",
+        e.bias
+    );
+    assert!(m.blur_corrected);
+    assert!((spread - expect).abs() <= 0.02 * expect, "{spread}");
+    assert!(e.bias.abs() <= 5e-3, "{e:?}");
+}

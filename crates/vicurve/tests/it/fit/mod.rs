@@ -3,6 +3,7 @@
 //! case reaches are printed (run with `--nocapture`) and recorded in
 //! docs/benchmarks.md.
 
+mod bias;
 mod border;
 mod breaks;
 mod far;
