@@ -25,9 +25,9 @@
 //! (no blur) is a limit of the formula (0/0); widths and the blur are raised
 //! to 1e-3 px (widths to 5 % of a larger blur, at most 0.02 px: see
 //! [`MIN_WIDTH`]), which moves a focused edge's profile by at most 4e-4 of
-//! the contrast at a
-//! pixel whose centre lies within 1e-3 px of a corner of the trapezoid
-//! (about 1e-5 RMS over the band; 1e-6 for a diagonal edge). The floors
+//! the contrast at a pixel whose centre lies within 1e-3 px of a corner of
+//! the trapezoid (about 1e-5 RMS over the band; 1e-6 for a diagonal edge).
+//! The floors
 //! must stay that small: the profile is exact coverage, and at 0.03 px of
 //! blur it differed from the coverage of a focused edge by up to 1.2 % of
 //! the contrast, 0.5 px from the edge (1e-3 RMS over the band): on a
