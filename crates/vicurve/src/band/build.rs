@@ -1,6 +1,7 @@
 //! Building a band: its parameters and their checks, the pixels' rows from
 //! one of the coordinate backends, and their storage as the band's columns.
 
+use super::blurred_curvature::BlurredCurvature;
 use super::levelset::LevelsetCoords;
 use super::{Band, BandScratch, Coords, MIN_JACOBIAN};
 use crate::curve::SplineCurve;
@@ -81,6 +82,8 @@ impl BandParams {
 pub(super) struct Pixels<'a> {
     pub curve: &'a SplineCurve,
     pub basis: &'a Basis,
+    /// The curvature the pixel-edge profile takes (`None`: the local one).
+    pub blurred_curvature: Option<&'a BlurredCurvature>,
     pub profile: Profile,
     pub half_width: f64,
     pub reach: f64,
@@ -133,7 +136,10 @@ impl Pixels<'_> {
 
     /// The band pixel at `foot`, whose parallel-curve Jacobian is
     /// `jacobian` (`1 - kappa r`, above [`MIN_JACOBIAN`]).
-    pub fn candidate(&self, foot: Foot, jacobian: f64) -> Candidate {
+    pub fn candidate(&self, mut foot: Foot, jacobian: f64) -> Candidate {
+        if let Some(table) = self.blurred_curvature {
+            foot.curvature = table.at(foot.s);
+        }
         let mut values = [0.0; MAX_DEGREE + 1];
         let first = self.basis.eval(foot.s, &mut values) as u32;
         let (gamma, dgamma) =
@@ -172,9 +178,14 @@ impl Band {
         }
         let reach = params.half_width + params.margin;
         check_inside(curve, reach, params.width, params.height)?;
+        let blurred_curvature = match params.profile {
+            Profile::PixelEdge { blur } => BlurredCurvature::new(curve, blur),
+            Profile::Paper { .. } => None,
+        };
         let pixels = Pixels {
             curve,
             basis,
+            blurred_curvature: blurred_curvature.as_ref(),
             profile: params.profile,
             half_width: params.half_width,
             reach,

@@ -24,7 +24,9 @@
 //! - `levelset_rows` with [`levelset`]: the paper's finite-element
 //!   coordinates instead;
 //! - `window`: the weights, and the window of a band with a margin;
-//! - `bend`: the displaced curve's curvature for a kept band.
+//! - `bend`: the displaced curve's curvature for a kept band;
+//! - `blurred_curvature`: the curvature the pixel-edge profile takes, the
+//!   reference's averaged along it over the blur.
 //!
 //! # Why the weight
 //! Pixels are uniform in the plane, so in `(s, r)` their density is
@@ -55,7 +57,9 @@
 //! # The displaced curve's curvature
 //! The pixel-edge profile depends on the edge's curvature (a blurred
 //! curved edge's half level lies `(sigma^2 + 1/12) kappa / 2` off it),
-//! which it takes from the reference. A band that serves several frames of
+//! which it takes from the reference, averaged over the blur (see
+//! `blurred_curvature`: the local curvature answers an oscillation the
+//! blur has erased, and the settles grow it). A band that serves several frames of
 //! a sequence (`fit::TrackCache`) has a reference a few frames old, and a
 //! curve that shrinks, grows or bends in the meantime no longer has its
 //! curvature: such a run takes the curvature of the curve it starts from
@@ -80,6 +84,7 @@
 //! exact backend's "closest point is not an end").
 
 mod bend;
+mod blurred_curvature;
 mod build;
 mod coords;
 mod exact;

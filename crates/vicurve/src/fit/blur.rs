@@ -175,6 +175,19 @@ pub(super) fn resolved_element(blur: f64) -> f64 {
     std::f64::consts::PI * (blur * blur + 1.0 / 12.0).sqrt()
 }
 
+/// The shortest elements of a pixel-edge stage under an optical blur of
+/// `blur` pixels: `1 / sqrt 2` of [`resolved_element`], where the shortest
+/// oscillation's gain through the blurred curvature
+/// (`band/blurred_curvature.rs`) is `exp(-1/2)` = 0.61 and the blur keeps
+/// 37 % of it in the image. The profile's curvature averaged over the blur
+/// keeps every settle's gain under `2 / e`, so shorter elements than
+/// [`resolved_element`] no longer grow an oscillation; the refinement's
+/// stop rule decides whether the image holds their detail (a blurred
+/// star's bays of 14 px radius need them).
+pub(super) fn shortest_element(blur: f64) -> f64 {
+    resolved_element(blur) * std::f64::consts::FRAC_1_SQRT_2
+}
+
 /// How much the settles of a pixel-edge stage with elements `h` pixels long
 /// amplify the noise of the position, for an optical blur of `blur` pixels
 /// (a factor on the Gauss–Newton `sigma`, at least 1).
@@ -188,9 +201,13 @@ pub(super) fn resolved_element(blur: f64) -> f64 {
 /// oscillation check of the output covers the result).
 pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
     let v = blur * blur + 1.0 / 12.0;
-    let g = (v * std::f64::consts::PI.powi(2) / (2.0 * h * h)).min(0.9);
-    // Simpson's rule on 16 intervals.
-    let f = |x: f64| (1.0 - g * x * x).powi(-2);
+    let g = v * std::f64::consts::PI.powi(2) / (2.0 * h * h);
+    // Simpson's rule on 16 intervals; the gain at `x` is that of the
+    // blurred curvature (`band/blurred_curvature.rs`), at most 2 / e.
+    let f = |x: f64| {
+        let gx = g * x * x;
+        (1.0 - gx * (-0.5 * gx).exp()).powi(-2)
+    };
     let n = 16;
     let sum: f64 = (0..=n)
         .map(|i| {

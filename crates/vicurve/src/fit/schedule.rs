@@ -5,7 +5,7 @@
 //! frame's band is kept for the next frame.
 
 use super::blur::{
-    estimate_spread, matched_band, pixel_edge_band, resolved_element, BAND_MISMATCH,
+    estimate_spread, matched_band, pixel_edge_band, shortest_element, BAND_MISMATCH,
     MIN_EDGE_FIT_QUALITY,
 };
 use super::loops;
@@ -250,9 +250,9 @@ impl<'s> Schedule<'s> {
                 // refining further when that stage could (its sine profile
                 // may have stopped on aliasing, which the pixel edge does
                 // not have).
-                // No shorter than the blur resolves (`resolved_element`).
+                // No shorter than the blur resolves (`shortest_element`).
                 let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
-                let floor = resolved_element(blur);
+                let floor = shortest_element(blur);
                 let elements = match stage.elements {
                     Elements::Auto { shortest, .. } => Elements::Auto {
                         longest: chosen.max(floor),
