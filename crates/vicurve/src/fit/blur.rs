@@ -156,21 +156,23 @@ pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
     (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
 }
 
-/// The shortest element (pixels) whose detail an edge of optical blur
-/// `blur` (pixels) resolves, for the pixel-edge profile: `pi sqrt(v)`, `v =
-/// blur^2 + 1/12` the variance of the whole spread.
+/// The element length (pixels) at which the local curvature's loop gain
+/// reaches 1/2 for an edge of optical blur `blur` (pixels): `pi sqrt(v)`,
+/// `v = blur^2 + 1/12` the variance of the whole spread. The output's
+/// oscillation check looks at curves whose elements are shorter than
+/// `1 / sqrt 2` of it.
 ///
-/// Why: the profile places the edge `v kappa / 2` off its blurred half
-/// level, `kappa` the reference's curvature. A settle re-references on the
-/// measured curve, so an oscillation of the curve at wavenumber `k` comes
-/// back in the next reference's curvature and the next fit answers it with
-/// `v k^2 / 2` times its amplitude: a loop gain, the first term of the
-/// blur's true response `exp(v k^2 / 2)` to an oscillation it has all but
-/// erased. The shortest oscillation of elements `h` long has `k = pi / h`;
-/// at `h = pi sqrt(v)` its gain is 1/2 (each settle halves it) and the blur
-/// keeps `exp(-1/2)` = 61 % of it in the image: shorter elements describe
-/// detail the image no longer holds, and above a gain of 1 the settles
-/// grow noise into an oscillation of the curve (a 4 px blur: 8.5 px).
+/// Why: with the local curvature `kappa` of the reference, the profile
+/// places the edge `v kappa / 2` off its blurred half level. A settle
+/// re-references on the measured curve, so an oscillation of the curve at
+/// wavenumber `k` comes back in the next reference's curvature and the
+/// next fit answers it with `v k^2 / 2` times its amplitude, the first
+/// term of the blur's true response `exp(-v k^2 / 2)`. The shortest
+/// oscillation of elements `h` long has `k = pi / h`; at `h = pi sqrt(v)`
+/// its gain is 1/2, and above a gain of 1 the settles grow noise into an
+/// oscillation of the curve. The profile takes the curvature averaged
+/// over the blur (`band/blurred_curvature.rs`), whose gain stays under
+/// `2 / e`; the stage's elements are bounded by [`shortest_element`].
 pub(super) fn resolved_element(blur: f64) -> f64 {
     std::f64::consts::PI * (blur * blur + 1.0 / 12.0).sqrt()
 }
@@ -193,17 +195,15 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
 /// (a factor on the Gauss–Newton `sigma`, at least 1).
 ///
 /// Each settle answers the reference's oscillations of wavenumber `k` with
-/// `g = v k^2 / 2` times their amplitude (see [`resolved_element`]), so the
+/// `g = (v k^2 / 2) exp(-v k^2 / 4)` times their amplitude (the blurred
+/// curvature's gain, `band/blurred_curvature.rs`; at most `2 / e`), so the
 /// settled curve holds the noise of one fit amplified by `1 / (1 - g)`. The
 /// noise of `U` spreads about evenly over `k` up to `pi / h`: the factor is
-/// the RMS of `1 / (1 - g_h x^2)` over `x` in `[0, 1]`, `g_h` the gain at
-/// `pi / h` (capped at 0.9: above 1 the settles do not converge, and the
-/// oscillation check of the output covers the result).
+/// the RMS of `1 / (1 - g)` over `k` in `[0, pi / h]`.
 pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
     let v = blur * blur + 1.0 / 12.0;
     let g = v * std::f64::consts::PI.powi(2) / (2.0 * h * h);
-    // Simpson's rule on 16 intervals; the gain at `x` is that of the
-    // blurred curvature (`band/blurred_curvature.rs`), at most 2 / e.
+    // Simpson's rule on 16 intervals, over x = k h / pi.
     let f = |x: f64| {
         let gx = g * x * x;
         (1.0 - gx * (-0.5 * gx).exp()).powi(-2)

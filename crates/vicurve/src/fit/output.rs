@@ -2,7 +2,7 @@
 //! `x0 + U n` refitted as a B-spline, its samples with normals, `sigma`
 //! and robust weight, and the gray levels along it.
 
-use super::blur::{resolved_element, settle_noise_gain};
+use super::blur::{settle_noise_gain, shortest_element};
 use super::breaks;
 use super::misfit::{oscillation, oscillation_at, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
@@ -179,15 +179,18 @@ impl<'a> SigmaTerms<'a> {
         let closed = fin.reference.is_closed();
         let step = s.last().copied().unwrap_or(0.0) / (pts.len().max(2) - 1) as f64;
         let span = fin.corr.basis().element_length();
-        // Elements short enough for the blur's loop gain to exceed 1
-        // (`resolved_element`: `1 / sqrt 2` of it) may oscillate unseen by
-        // the residuals; longer ones follow what the image shows.
-        let resolved = match fin.profile {
-            Profile::PixelEdge { blur } => Some(resolved_element(blur)),
-            Profile::Paper { .. } => blur.map(|b| std::f64::consts::PI * b),
+        // Elements shorter than the blur resolves (`shortest_element`;
+        // given ones can be) may describe an oscillation the image no
+        // longer holds, unseen by the residuals; longer ones follow what
+        // the image shows.
+        let shortest = match fin.profile {
+            Profile::PixelEdge { blur } => Some(shortest_element(blur)),
+            Profile::Paper { .. } => {
+                blur.map(|b| std::f64::consts::PI * b * std::f64::consts::FRAC_1_SQRT_2)
+            }
         };
-        let oscillation = resolved
-            .filter(|&r| span < r * std::f64::consts::FRAC_1_SQRT_2)
+        let oscillation = shortest
+            .filter(|&r| span < r)
             .map(|_| oscillation(pts, normals, step, span, closed));
         // A pixel-edge stage's settles amplify the noise of one fit.
         let gain = match fin.profile {
