@@ -20,10 +20,9 @@
 //! Edge cases: the curve's parameter is taken as its arc length (the
 //! references are parametrised by it, to within a fraction of a percent);
 //! an open curve's average is taken over the part of the kernel on the
-//! curve (renormalised); a curve with corners is averaged across them
-//! (their sides are measured with curvature 0 near the vertex anyway when
-//! they are straight); no blur, or a table that would be longer than the
-//! curve's kernel allows, is the local curvature.
+//! curve (renormalised); a closed curve's wraps around; a curve with
+//! corners is averaged across them like any other stretch; without blur
+//! there is no table and the profile takes the local curvature.
 
 use crate::curve::SplineCurve;
 

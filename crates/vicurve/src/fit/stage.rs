@@ -405,16 +405,7 @@ impl Schedule<'_> {
     ) -> Result<Next> {
         let r = st.stage.half_width;
         match end {
-            Run::Rereference => {
-                let spacing = reference_spacing(system.corr.basis());
-                match self.move_reference(st, system.corr.basis(), &lambda, spacing)? {
-                    None => Ok(Next::Again),
-                    Some(looped) => {
-                        let system = (system.profile, system.corr.basis(), system.band_pixels);
-                        Ok(self.diverge(st, looped, system))
-                    }
-                }
-            }
+            Run::Rereference => self.rereference(st, &system, &lambda),
             Run::Lost => {
                 st.far = true;
                 Ok(Next::Again)
@@ -423,14 +414,7 @@ impl Schedule<'_> {
             // the configuration.
             Run::Converged if st.far => {
                 st.far = false;
-                let spacing = reference_spacing(system.corr.basis());
-                match self.move_reference(st, system.corr.basis(), &lambda, spacing)? {
-                    None => Ok(Next::Again),
-                    Some(looped) => {
-                        let system = (system.profile, system.corr.basis(), system.band_pixels);
-                        Ok(self.diverge(st, looped, system))
-                    }
-                }
+                self.rereference(st, &system, &lambda)
             }
             Run::Failed(divergence) if st.appended => {
                 self.skipped
@@ -676,6 +660,23 @@ impl Schedule<'_> {
             self.run_start = Some(lambda.clone());
         }
         lambda
+    }
+
+    /// The next run from a new reference (`x0 + U n` of the run `system`
+    /// ended with), or the stage's divergence when that curve loops.
+    fn rereference(
+        &mut self,
+        st: &mut StageState,
+        system: &RunSystem,
+        lambda: &[f64],
+    ) -> Result<Next> {
+        let basis = system.corr.basis();
+        match self.move_reference(st, basis, lambda, reference_spacing(basis))? {
+            None => Ok(Next::Again),
+            Some(looped) => {
+                Ok(self.diverge(st, looped, (system.profile, basis, system.band_pixels)))
+            }
+        }
     }
 
     /// A new reference `x0 + U n`, control points `spacing` apart, for the

@@ -16,22 +16,10 @@ use super::Shape;
 /// The vertices of a [`Shape::Polygon`], counterclockwise on screen, px
 /// (empty for any other shape).
 pub(crate) fn vertices(shape: &Shape) -> Vec<[f64; 2]> {
-    let Shape::Polygon {
-        cx,
-        cy,
-        r,
-        sides,
-        angle,
-    } = *shape
-    else {
+    let Shape::Polygon { sides, .. } = *shape else {
         return Vec::new();
     };
-    (0..sides)
-        .map(|k| {
-            let th = angle + TAU * f64::from(k) / f64::from(sides);
-            [cx + r * th.cos(), cy - r * th.sin()]
-        })
-        .collect()
+    (0..i64::from(sides)).map(|k| vertex(shape, k)).collect()
 }
 
 /// Vertex `k` (taken modulo the number of sides).
