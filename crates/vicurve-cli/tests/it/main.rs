@@ -8,5 +8,6 @@ mod conformance;
 mod diagnostics;
 mod export;
 mod golden;
+mod speed;
 mod start;
 mod track;

@@ -1,11 +1,13 @@
 //! `vicurve bench paper`: the paper's performance study (section 7,
 //! figures 7 to 10) re-run on its own synthetic disc, plus an exact-coverage
 //! study with blur and noise; numbers as CSV, figures as SVG and PNG, and a
-//! report that sets them against the paper's stated figures; and
-//! `vicurve bench conformance`, the conformance sweep ([`conformance`]).
+//! report that sets them against the paper's stated figures;
+//! `vicurve bench conformance`, the conformance sweep ([`conformance`]);
+//! and `vicurve bench speed`, the time of one measurement ([`speed`]).
 
 mod conformance;
 mod paper;
+mod speed;
 
 use crate::failure::Failure;
 use crate::plot::{write_png, write_svg, Figure, Panel, Series};
@@ -34,6 +36,11 @@ enum Which {
     /// polarity measured against the exact truth and the acceptance
     /// criteria; write conformance.csv and conformance.md.
     Conformance(conformance::ConformanceArgs),
+    /// The time of one measurement from scratch (issue 19's three cases):
+    /// whole `vicurve measure` processes (median, spread, peak memory), the
+    /// parts timed in-process, optionally a perf profile and the Python
+    /// peers on the same images; write speed.md and speed.csv.
+    Speed(speed::SpeedArgs),
 }
 
 /// Arguments of `vicurve bench paper`.
@@ -52,6 +59,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     match args.which {
         Which::Paper(a) => paper(&a),
         Which::Conformance(a) => conformance::conformance(&a),
+        Which::Speed(a) => speed::speed(&a),
     }
 }
 

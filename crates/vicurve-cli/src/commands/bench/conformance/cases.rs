@@ -410,7 +410,9 @@ fn with_starts(image: &ImageCase, stages: Option<&'static str>) -> Vec<Case> {
         .collect()
 }
 
-fn case(image: &ImageCase, start: Start, stages: Option<&'static str>) -> Case {
+/// The case of `start` on `image`, with explicit `stages` if any (its id
+/// then ends in `/paper-stages`).
+pub fn case(image: &ImageCase, start: Start, stages: Option<&'static str>) -> Case {
     let mut id = format!("{}/{}", image.id, start.name());
     if stages.is_some() {
         id.push_str("/paper-stages");

@@ -5,9 +5,9 @@
 //! `conformance.csv` and `conformance.md` ([`report`]) say which cases
 //! fail and why.
 
-mod cases;
+pub(super) mod cases;
 mod report;
-mod run;
+pub(super) mod run;
 mod score;
 
 use crate::failure::Failure;

@@ -111,7 +111,7 @@ fn break_positions(init: &InitialCurve, corners: &[[f64; 2]]) -> Result<Vec<f64>
 /// The start of `case`, built from the truth (explicit starts) or found in
 /// the image (the automatic start, with the library calls `measure`
 /// makes).
-fn initial_curve(case: &Case, image: &Image) -> Result<InitialCurve, String> {
+pub fn initial_curve(case: &Case, image: &Image) -> Result<InitialCurve, String> {
     let shape = &case.image.spec.shape;
     let mut rng = Rng::new(&case.id);
     match case.start {
