@@ -22,6 +22,8 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::image::Image;
 
+mod prefilter;
+
 /// How gray levels between pixel centres are computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -133,30 +135,18 @@ impl Sampler {
         if kind == Interpolation::Bilinear && w >= 2 && h >= 2 {
             return Sampler::with_coef(kind, w, h, 0, image.shared_data());
         }
-        // Only the prefilter needs a copy of its own (bilinear and Keys read
-        // the pixel values themselves): one megapixel copied is ~1 ms.
-        let filtered;
-        let values: &[f64] = if kind == Interpolation::CubicBSpline {
-            let mut v = image.data().to_vec();
-            prefilter_2d(&mut v, w, h);
-            filtered = v;
-            &filtered
-        } else {
-            image.data()
-        };
+        // The image copied into the middle of the padded buffer, prefiltered
+        // there in place for a cubic B-spline, then its border mirrored.
         let stride = w + 2 * PAD;
-        let mut coef = Vec::with_capacity(stride * (h + 2 * PAD));
-        // Columns mirrored at the two ends, the row's interior copied whole.
-        let left: Vec<usize> = (0..PAD)
-            .map(|px| mirror(px as isize - PAD as isize, w))
-            .collect();
-        let right: Vec<usize> = (0..PAD).map(|k| mirror((w + k) as isize, w)).collect();
-        for py in 0..h + 2 * PAD {
-            let row = &values[mirror(py as isize - PAD as isize, h) * w..][..w];
-            coef.extend(left.iter().map(|&j| row[j]));
-            coef.extend_from_slice(row);
-            coef.extend(right.iter().map(|&j| row[j]));
+        let mut coef = vec![0.0; stride * (h + 2 * PAD)];
+        let data = image.data();
+        for (y, row) in data.chunks_exact(w).enumerate() {
+            coef[(y + PAD) * stride + PAD..][..w].copy_from_slice(row);
         }
+        if kind == Interpolation::CubicBSpline {
+            prefilter::prefilter_2d_in(&mut coef, w, h, stride, PAD);
+        }
+        prefilter::mirror_border(&mut coef, w, h, stride, PAD);
         Sampler::with_coef(kind, w, h, PAD, Arc::new(coef))
     }
 
@@ -379,90 +369,4 @@ fn mirror(k: isize, n: usize) -> usize {
     } else {
         period as usize - r
     }
-}
-
-/// The pole of the cubic B-spline prefilter, `sqrt(3) - 2`.
-const POLE: f64 = -0.267_949_192_431_122_7;
-
-/// Replaces the `w x h` row-major samples by the coefficients of the cubic
-/// B-spline that interpolates them with mirror boundaries (rows, then
-/// columns: the 2-D filter is separable).
-fn prefilter_2d(values: &mut [f64], w: usize, h: usize) {
-    use rayon::prelude::*;
-    values.par_chunks_exact_mut(w).for_each(prefilter_line);
-    // Columns: filter the rows of the transpose (contiguous, in parallel).
-    let mut t = vec![0.0; w * h];
-    transpose(values, &mut t, w, h);
-    t.par_chunks_exact_mut(h).for_each(prefilter_line);
-    transpose(&t, values, h, w);
-}
-
-/// `dst` (`w` rows of `h`) = transpose of `src` (`h` rows of `w`), by
-/// cache-sized blocks.
-fn transpose(src: &[f64], dst: &mut [f64], w: usize, h: usize) {
-    const B: usize = 32;
-    for y0 in (0..h).step_by(B) {
-        for x0 in (0..w).step_by(B) {
-            for y in y0..(y0 + B).min(h) {
-                for x in x0..(x0 + B).min(w) {
-                    dst[x * h + y] = src[y * w + x];
-                }
-            }
-        }
-    }
-}
-
-/// In place, samples `s` become the coefficients `c` of the cubic B-spline
-/// with `(c[k-1] + 4 c[k] + c[k+1]) / 6 = s[k]` under mirror boundaries
-/// (`c[-1] = c[1]`, `c[n] = c[n-2]`): a causal then an anti-causal
-/// first-order recursive filter with pole `z = sqrt(3) - 2` and gain 6
-/// (Unser, Aldroubi & Eden 1993; Thévenaz, Blu & Unser 2000).
-fn prefilter_line(c: &mut [f64]) {
-    let n = c.len();
-    if n < 2 {
-        return; // One sample: the constant spline, c = s.
-    }
-    let z = POLE;
-    for v in c.iter_mut() {
-        *v *= (1.0 - z) * (1.0 - 1.0 / z);
-    }
-    c[0] = initial_causal(c, z);
-    for k in 1..n {
-        c[k] += z * c[k - 1];
-    }
-    c[n - 1] = (z / (z * z - 1.0)) * (z * c[n - 2] + c[n - 1]);
-    for k in (0..n - 1).rev() {
-        c[k] = z * (c[k + 1] - c[k]);
-    }
-}
-
-/// First causal coefficient `sum_{k >= 0} z^k s[k]` over the mirrored,
-/// infinitely extended sequence.
-fn initial_causal(c: &[f64], z: f64) -> f64 {
-    let n = c.len();
-    // |z|^40 < 1e-22: beyond 40 terms the sum no longer changes in f64.
-    const HORIZON: usize = 40;
-    if n > HORIZON {
-        let mut zk = 1.0;
-        let mut sum = 0.0;
-        for v in &c[..=HORIZON] {
-            sum += zk * v;
-            zk *= z;
-        }
-        return sum;
-    }
-    // Exact sum over one period 2n - 2 of the mirrored sequence, divided by
-    // 1 - z^(2n-2) for the geometric repetition.
-    let iz = 1.0 / z;
-    let mut zk = z;
-    let z_last = z.powi(n as i32 - 1);
-    let mut sum = c[0] + z_last * c[n - 1];
-    // Sample k also appears at 2n - 2 - k in the period.
-    let mut z2k = z_last * z_last * iz;
-    for v in &c[1..n - 1] {
-        sum += (zk + z2k) * v;
-        zk *= z;
-        z2k *= iz;
-    }
-    sum / (1.0 - zk * zk)
 }
