@@ -9,6 +9,8 @@ fn speed_bench_writes_its_report() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("speed");
     let out_text = out.display().to_string();
+    let work = dir.path().join("work");
+    let work_text = work.display().to_string();
     let run = vicurve(&[
         "bench",
         "speed",
@@ -20,15 +22,17 @@ fn speed_bench_writes_its_report() {
         "/nonexistent/python3",
         "--out",
         &out_text,
+        "--work",
+        &work_text,
     ]);
     ok(&run);
     let printed = text(&run.stdout);
     let cases = ["disc-512", "star-1024", "far-star-1704x2272"];
     for case in cases {
         assert!(printed.contains(case), "{case} not in: {printed}");
-        assert!(out.join("images").join(format!("{case}.png")).is_file());
-        assert!(out.join("runs").join(format!("{case}.json")).is_file());
-        assert!(out.join("runs").join(format!("{case}.csv")).is_file());
+        assert!(work.join("images").join(format!("{case}.png")).is_file());
+        assert!(work.join("runs").join(format!("{case}.json")).is_file());
+        assert!(work.join("runs").join(format!("{case}.csv")).is_file());
     }
     // The peers could not run: said in one line, vicurve's table printed.
     let not_run: Vec<&str> = printed

@@ -5,12 +5,13 @@
 //! of the cubic B-spline that interpolates it under mirror boundaries: a
 //! causal then an anti-causal first-order recursive filter with pole
 //! `z = sqrt(3) - 2` and gain 6 (Unser, Aldroubi & Eden 1993; Thévenaz,
-//! Blu & Unser 2000), [`prefilter_line`]. The rows are filtered one task
-//! each; the columns by strips of [`STRIP`] adjacent columns, each strip's
-//! recursions run down the rows on all its columns at once (contiguous in
-//! memory, no transpose). Every column still goes through exactly the
-//! floating-point operations of [`prefilter_line`], in the same order, so
-//! the coefficients are bit-identical to filtering each column alone.
+//! Blu & Unser 2000), [`prefilter_line`]. The rows are filtered by groups
+//! of [`ROWS`], their recursions interleaved; the columns by strips of
+//! [`STRIP`] adjacent columns, each strip's recursions run down the rows on
+//! all its columns at once (contiguous in memory, no transpose). Every row
+//! and column still goes through exactly the floating-point operations of
+//! [`prefilter_line`], in the same order, so the coefficients are
+//! bit-identical to filtering each line alone.
 
 use rayon::prelude::*;
 
@@ -24,6 +25,11 @@ const HORIZON: usize = 40;
 /// Columns filtered together by one task (256 bytes of each row).
 const STRIP: usize = 32;
 
+/// Rows filtered together, their recursions interleaved: one row's
+/// recursion is a chain of dependent multiply-adds, bound by their latency;
+/// eight independent chains keep the arithmetic units busy.
+const ROWS: usize = 8;
+
 /// The gain of the two recursions, `(1 - z) (1 - 1/z)` (6).
 fn gain(z: f64) -> f64 {
     (1.0 - z) * (1.0 - 1.0 / z)
@@ -35,9 +41,17 @@ fn gain(z: f64) -> f64 {
 /// nor written.
 pub(super) fn prefilter_2d_in(buf: &mut [f64], w: usize, h: usize, stride: usize, pad: usize) {
     let interior = &mut buf[pad * stride..(pad + h) * stride];
-    interior
-        .par_chunks_exact_mut(stride)
-        .for_each(|row| prefilter_line(&mut row[pad..pad + w]));
+    interior.par_chunks_mut(ROWS * stride).for_each(|group| {
+        let mut rows: Vec<&mut [f64]> = group
+            .chunks_exact_mut(stride)
+            .map(|row| &mut row[pad..pad + w])
+            .collect();
+        if rows.len() == ROWS && w > HORIZON {
+            prefilter_rows(&mut rows);
+        } else {
+            rows.into_iter().for_each(prefilter_line);
+        }
+    });
     if h <= HORIZON {
         // Short columns: the exact mirrored sum of `initial_causal`, one
         // column at a time (small images only).
@@ -64,6 +78,50 @@ pub(super) fn prefilter_2d_in(buf: &mut [f64], w: usize, h: usize, stride: usize
     segments
         .into_par_iter()
         .for_each(|mut rows| prefilter_columns(&mut rows));
+}
+
+/// [`prefilter_line`] on each of the [`ROWS`] rows of `rows` (all of one
+/// length, more than [`HORIZON`]), the rows' recursions interleaved: the
+/// same operations on each row, in the same order.
+fn prefilter_rows(rows: &mut [&mut [f64]]) {
+    let z = POLE;
+    let g = gain(z);
+    let n = rows[0].len();
+    let mut prev = [0.0; ROWS];
+    for (r, row) in rows.iter_mut().enumerate() {
+        // `initial_causal`'s sum over the gained samples 0..=HORIZON.
+        let mut zk = 1.0;
+        let mut sum = 0.0;
+        for v in &row[..=HORIZON] {
+            sum += zk * (*v * g);
+            zk *= z;
+        }
+        row[0] = sum;
+        prev[r] = sum;
+    }
+    // Causal: c[k] = g s[k] + z c[k - 1].
+    for k in 1..n {
+        for (row, p) in rows.iter_mut().zip(prev.iter_mut()) {
+            let c = row[k] * g + z * *p;
+            row[k] = c;
+            *p = c;
+        }
+    }
+    // The last anti-causal coefficient, then the anti-causal recursion.
+    let last = z / (z * z - 1.0);
+    let mut next = [0.0; ROWS];
+    for (row, q) in rows.iter_mut().zip(next.iter_mut()) {
+        let c = last * (z * row[n - 2] + row[n - 1]);
+        row[n - 1] = c;
+        *q = c;
+    }
+    for k in (0..n - 1).rev() {
+        for (row, q) in rows.iter_mut().zip(next.iter_mut()) {
+            let c = z * (*q - row[k]);
+            row[k] = c;
+            *q = c;
+        }
+    }
 }
 
 /// [`prefilter_line`] on every column of `rows` (the row segments of a
@@ -243,6 +301,8 @@ mod tests {
             (33, 45),
             (100, 97),
             (64, 130),
+            (45, 8),
+            (45, 17),
         ] {
             let values: Vec<f64> = (0..w * h).map(|_| next()).collect();
             let stride = w + 2 * pad;

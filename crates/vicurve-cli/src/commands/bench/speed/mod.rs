@@ -26,10 +26,15 @@ pub struct SpeedArgs {
     /// measurements); medians, minima and maxima are reported.
     #[arg(long, default_value_t = 7)]
     repeats: usize,
-    /// Output directory (created if needed): speed.md, speed.csv, the
-    /// images (images/) and the runs' result files (runs/) are replaced.
+    /// Output directory (created if needed): speed.md and speed.csv are
+    /// replaced.
     #[arg(long, default_value = "speed")]
     out: PathBuf,
+    /// Working directory (created if needed): the images (images/) and
+    /// the runs' result files (runs/); default: vicurve-speed in the
+    /// system's temporary directory.
+    #[arg(long, value_name = "DIR")]
+    work: Option<PathBuf>,
     /// Also time scikit-image `find_contours` and subpixel-edges on the
     /// same images (bench/peers/speed_peers.py, needs the packages of
     /// bench/peers/requirements.txt) and print the ratios.
@@ -75,8 +80,12 @@ pub fn speed(args: &SpeedArgs) -> Result<(), Failure> {
         return Err(Failure::Error("--repeats must be at least 1".into()));
     }
     let out = &args.out;
-    let images = out.join("images");
-    let runs = out.join("runs");
+    let work = args
+        .work
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join("vicurve-speed"));
+    let images = work.join("images");
+    let runs = work.join("runs");
     for d in [out, &images, &runs] {
         std::fs::create_dir_all(d)
             .map_err(|e| format!("cannot create the directory {}: {e}", d.display()))?;
@@ -118,7 +127,11 @@ pub fn speed(args: &SpeedArgs) -> Result<(), Failure> {
         &out.join("speed.csv"),
         &report::csv(&results, peer_result.as_ref()),
     )?;
-    println!("wrote {} (speed.md, speed.csv)", out.display());
+    println!(
+        "wrote {} (speed.md, speed.csv); images and runs in {}",
+        out.display(),
+        work.display()
+    );
     Ok(())
 }
 
@@ -249,6 +262,9 @@ fn command_line(args: &SpeedArgs) -> String {
     }
     if args.profile {
         c.push_str(" --profile");
+    }
+    if let Some(w) = &args.work {
+        c.push_str(&format!(" --work {}", w.display()));
     }
     if args.quick {
         c.push_str(" --quick");

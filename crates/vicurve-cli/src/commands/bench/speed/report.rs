@@ -287,7 +287,7 @@ pub fn markdown(
     );
     let _ = writeln!(
         s,
-        "Cases (images rendered by the library, saved as 8-bit PNG in `images/`):\n"
+        "Cases (images rendered by the library, saved as 8-bit PNG in the working directory's `images/`):\n"
     );
     for r in results {
         let _ = writeln!(s, "- `{}`: {}.", r.case.name, r.case.what);
