@@ -66,6 +66,16 @@ impl ResidualMisfit {
         })
     }
 
+    /// The factor on the noise variance for residuals correlated along
+    /// the curve ([`super::correlated`]), on the displacement's `basis`.
+    /// The bins where the misfit term speaks are left out.
+    pub fn correlation_factor(&self, basis: &crate::spline::Basis) -> f64 {
+        let misfit: Vec<bool> = (0..self.bins.len())
+            .map(|k| self.at((k as f64 + 0.5) * BIN) > 0.0)
+            .collect();
+        super::correlated::noise_correlation_factor(&self.bins, &misfit, self.noise, basis, BIN)
+    }
+
     /// The misfit's RMS displacement near reference parameter `u`, pixels
     /// (0 where the residuals are those of noise).
     pub fn at(&self, u: f64) -> f64 {

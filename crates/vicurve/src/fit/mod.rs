@@ -25,7 +25,9 @@
 //! - `loops.rs`: a new reference or result that crosses itself or folds
 //!   back is a divergence.
 //! - `output.rs`: the measured curve and its samples with `sigma`;
-//!   `misfit.rs`: its model-misfit term (residuals, oscillation).
+//!   `misfit.rs`: its model-misfit term (residuals, oscillation);
+//!   `correlated.rs`: the factor on its noise term for residuals
+//!   correlated along the curve (textured surfaces).
 //! - [`breaks`], [`grow`], `track.rs`: corners, growing a short start,
 //!   the tracking schedule of a sequence's frames.
 //!
@@ -41,6 +43,7 @@
 mod blur;
 pub mod breaks;
 mod config;
+mod correlated;
 pub mod grow;
 mod loops;
 mod misfit;

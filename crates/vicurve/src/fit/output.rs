@@ -162,7 +162,8 @@ struct SigmaTerms<'a> {
     oscillation: Option<Vec<f64>>,
     /// Points of `x0 + U n` in an element.
     reach: usize,
-    /// The settles' noise gain on the Gauss–Newton `sigma`.
+    /// The settles' noise gain on the Gauss–Newton `sigma`, times the root
+    /// of the residuals' correlation factor ([`super::correlated`]).
     gain: f64,
 }
 
@@ -197,12 +198,16 @@ impl<'a> SigmaTerms<'a> {
             Profile::PixelEdge { blur } => settle_noise_gain(blur, span),
             Profile::Paper { .. } => 1.0,
         };
+        let residual = ResidualMisfit::new(&fin.corr, &fin.lambda, sampler);
+        let correlation = residual
+            .as_ref()
+            .map_or(1.0, |r| r.correlation_factor(fin.corr.basis()));
         SigmaTerms {
             fin,
-            residual: ResidualMisfit::new(&fin.corr, &fin.lambda, sampler),
+            residual,
             oscillation,
             reach: ((span / step.max(1e-9)).round() as usize).max(1),
-            gain,
+            gain: gain * correlation.sqrt(),
         }
     }
 

@@ -385,7 +385,15 @@ impl Schedule<'_> {
             f64::INFINITY
         };
         let limits = RunLimits {
-            budget: self.config.max_iterations.saturating_sub(st.iterations),
+            // At least one iteration: a run on a new reference with the
+            // stage's budget spent must still fit its gray levels, or the
+            // result (its outcome the iteration limit) has no `sigma`; past
+            // the budget, `after_run` ends the stage after that run.
+            budget: self
+                .config
+                .max_iterations
+                .saturating_sub(st.iterations)
+                .max(1),
             tolerance,
             rereference,
             half_width: r,
@@ -405,6 +413,12 @@ impl Schedule<'_> {
     ) -> Result<Next> {
         let r = st.stage.half_width;
         match end {
+            // Past the budget (its runs get one iteration each, see
+            // `limits`), a run that asks for a new reference or lost the edge
+            // ends the stage on its own fit, which has its levels and sigma.
+            Run::Rereference | Run::Lost if st.iterations > self.config.max_iterations => {
+                self.end_run(st, Outcome::IterationLimit, system, lambda)
+            }
             Run::Rereference => self.rereference(st, &system, &lambda),
             Run::Lost => {
                 st.far = true;
