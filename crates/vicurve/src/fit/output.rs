@@ -19,8 +19,8 @@ use rayon::prelude::*;
 /// pixels; see [`Final::samples`] for the spacing taken.
 const FINE_STEP: f64 = 0.5;
 /// How much the displacement may stretch the reference (`1 + U kappa`)
-/// before the output samples, every `k`-th point of `x0 + U n`, come
-/// closer than the requested spacing ([`Final::samples`]).
+/// before the output samples, points of `x0 + U n`, come closer than the
+/// requested spacing ([`Final::samples`], `output_points`).
 const STRETCH_ALLOWANCE: f64 = 0.03;
 /// Spacing of [`super::Measurement::levels`] along the curve, pixels.
 const LEVEL_SAMPLE_SPACING: f64 = 8.0;
@@ -66,11 +66,11 @@ impl Final {
         degree: usize,
         blur: Option<f64>,
     ) -> Result<Output> {
-        // The output samples are every `per`-th of the points of `x0 + U
-        // n`, so that they are at most `spacing` apart: the points are
-        // taken a little closer than `spacing / per` on the reference, for
-        // the displacement's stretch (else, a chord a hair over half a
-        // pixel would make every point an output sample at 0.5 px).
+        // The output samples are points of `x0 + U n` at most `spacing`
+        // apart (`output_points`): the points are taken a little closer
+        // than `spacing / per` on the reference, for the displacement's
+        // stretch, so that every `per`-th one is an output sample where the
+        // curve is not stretched more than that.
         let per = (spacing / FINE_STEP).ceil().max(1.0);
         let fine_step = spacing / per / (1.0 + STRETCH_ALLOWANCE);
         let closed = self.reference.is_closed();
@@ -90,8 +90,6 @@ impl Final {
             s = chord_lengths(&pts);
         }
         let weights = WeightBins::new(&self.corr, self.reference.param_length());
-        let max_chord = s.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
-        let every = ((spacing / max_chord.max(1e-9)).floor() as usize).max(1);
         let levels = self.levels(&params, &s, closed);
         // In parallel (each point's values are its own; a maximum does not
         // depend on the order).
@@ -100,9 +98,12 @@ impl Final {
             .zip(&s)
             .map(|(q, &si)| crate::curve::dist(curve.point(si), *q))
             .reduce(|| 0.0, f64::max);
-        let kept: Vec<usize> = (0..pts.len())
-            .filter(|&i| i % every == 0 || (!closed && i + 1 == pts.len()))
-            .collect();
+        let closing = if closed {
+            pts.last().map_or(0.0, |q| crate::curve::dist(*q, pts[0]))
+        } else {
+            f64::INFINITY
+        };
+        let kept = output_points(&s, spacing, closing);
         let normals: Vec<[f64; 2]> = s.par_iter().map(|&si| curve.frame(si).normal).collect();
         let terms = SigmaTerms::new(self, sampler, (&pts, &normals, &s), blur);
         let samples: Vec<Sample> = kept
@@ -225,6 +226,36 @@ impl<'a> SigmaTerms<'a> {
     }
 }
 
+/// The indices of the output samples among points at arc lengths `s`
+/// (increasing, from 0): the first, then each point after which the next
+/// would lie more than `spacing` (px) from the last one kept, and an open
+/// curve's last point (`closing` infinite; for a closed curve, the chord
+/// from the last point back to the first). Samples are then at most
+/// `spacing` apart wherever the points' chords are, and as close to it as
+/// the points allow, even where the curve is locally stretched (where a
+/// rule by index, every `k`-th point with `k` from the longest chord,
+/// kept every point of the whole curve).
+fn output_points(s: &[f64], spacing: f64, closing: f64) -> Vec<usize> {
+    let n = s.len();
+    let mut kept = Vec::with_capacity(n);
+    if n == 0 {
+        return kept;
+    }
+    kept.push(0);
+    // A hair over `spacing`: points exactly `spacing` apart on the
+    // reference keep their regular rhythm despite rounding.
+    let reach = spacing * (1.0 + 1e-9);
+    let mut last = 0;
+    for i in 1..n {
+        let next = if i + 1 < n { s[i + 1] } else { s[i] + closing };
+        if next - s[last] > reach {
+            kept.push(i);
+            last = i;
+        }
+    }
+    kept
+}
+
 /// Robust weights binned by the reference parameter, 1 px bins (none when
 /// no pixel was reweighted: the weight is 1 everywhere).
 struct WeightBins {
@@ -290,4 +321,66 @@ pub(super) fn plain_samples(curve: &SplineCurve, spacing: f64) -> Vec<Sample> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::output_points;
+
+    /// Arc lengths of points with the given chords.
+    fn arcs(chords: &[f64]) -> Vec<f64> {
+        let mut s = vec![0.0];
+        for c in chords {
+            s.push(s.last().unwrap() + c);
+        }
+        s
+    }
+
+    /// The largest gap between kept samples (and, closed, back to the
+    /// first across `closing`).
+    fn largest_gap(s: &[f64], kept: &[usize], closing: f64) -> f64 {
+        let mut gap = kept
+            .windows(2)
+            .map(|w| s[w[1]] - s[w[0]])
+            .fold(0.0, f64::max);
+        if closing.is_finite() {
+            gap = gap.max(s[s.len() - 1] + closing - s[*kept.last().unwrap()]);
+        }
+        gap
+    }
+
+    /// Regular chords: every `per`-th point, and an open curve's end.
+    #[test]
+    fn regular_points_keep_their_rhythm() {
+        let s = arcs(&[0.485; 40]);
+        let kept = output_points(&s, 1.0, f64::INFINITY);
+        assert_eq!(&kept[..4], &[0, 2, 4, 6]);
+        assert_eq!(*kept.last().unwrap(), 40);
+        assert!(largest_gap(&s, &kept, f64::INFINITY) <= 1.0);
+    }
+
+    /// A few stretched chords (a corner's fill, a displacement's stretch)
+    /// change the rhythm only where they are: the rest keeps half the
+    /// points, not all of them.
+    #[test]
+    fn a_local_stretch_does_not_double_the_samples() {
+        let mut chords = vec![0.485; 100];
+        chords[50] = 0.9;
+        chords[51] = 0.8;
+        let s = arcs(&chords);
+        let closing = 0.485;
+        let kept = output_points(&s, 1.0, closing);
+        assert!(kept.len() <= 55, "{} samples", kept.len());
+        assert!(largest_gap(&s, &kept, closing) <= 1.0);
+    }
+
+    /// Closed: the gap across the closing chord stays within the spacing.
+    #[test]
+    fn a_closed_curve_closes_within_the_spacing() {
+        for n in [7, 8, 9, 10] {
+            let s = arcs(&vec![0.45; n]);
+            let kept = output_points(&s, 1.0, 0.45);
+            assert!(largest_gap(&s, &kept, 0.45) <= 1.0, "{n}: {kept:?}");
+        }
+    }
 }
