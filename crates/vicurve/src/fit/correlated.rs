@@ -23,19 +23,21 @@
 //! excursions (and a single corner or speck, the local misfit term's
 //! business) do not inflate the whole curve.
 //!
-//! Two things are left to others. Requests larger than the noise explains
-//! (a lag-0 variance over white noise's) are systematic residuals, the
-//! misfit term's: that magnitude is divided out, or a noiseless line whose
-//! profile does not quite match would get a `sigma` six times its error.
-//! And the factor never lowers `sigma` (at least 1): requests smaller than
-//! white noise's mean that the Rice noise estimate took systematic
-//! residuals for noise, not that the curve is more precise than it says.
+//! Three things are left to others. The bins where the misfit term flags a
+//! request are left out: a shape the elements cannot follow leaves
+//! residuals correlated over the whole misfit, which that term covers.
+//! Requests larger than the noise explains (a lag-0 variance over white
+//! noise's) are systematic residuals, the misfit term's too: that
+//! magnitude is divided out, or a noiseless line whose profile does not
+//! quite match would get a `sigma` several times its error. And the factor
+//! never lowers `sigma` (at least 1): requests smaller than white noise's
+//! mean that the Rice noise estimate took systematic residuals for noise,
+//! not that the curve is more precise than it says.
 //!
 //! What it cannot see: elements short enough to follow the texture (the
 //! automatic length goes down to 5 px on a textured star) take its effect
 //! into the curve, and the residuals keep none of it; `sigma` then stays
-//! the white-noise one. Measured in `tests/it/realistic.rs` and the
-//! closing note of this change.
+//! the white-noise one (`tests/it/realistic.rs`, docs/benchmarks.md).
 
 use crate::correlation::ResidualBin;
 use crate::render::noise::Rng;
