@@ -277,15 +277,22 @@ mod tests {
             .collect()
     }
 
+    /// A closed cubic basis of 40 elements on 800 px.
+    fn closed_basis() -> Basis {
+        Basis::new(3, 40, 800.0, true).unwrap()
+    }
+
+    /// The projection on `basis` of 800 bins of unit information.
+    fn unit_projection(basis: &Basis) -> Projection<'_> {
+        Projection::new(&bins_of(&[0.0; 800]), basis, 1.0).unwrap()
+    }
+
     /// White requests after the fit's projection: a factor of about 1
     /// (held at 1 from below).
     #[test]
     fn white_residuals_leave_sigma_alone() {
-        let basis = Basis::new(3, 40, 800.0, true).unwrap();
-        let proj = {
-            let b = bins_of(&vec![0.0; 800]);
-            Projection::new(&b, &basis, 1.0).unwrap()
-        };
+        let basis = closed_basis();
+        let proj = unit_projection(&basis);
         let mut rng = Rng::new(3);
         let mut d: Vec<f64> = (0..800).map(|_| rng.normal()).collect();
         proj.remove_fit(&mut d);
@@ -297,11 +304,8 @@ mod tests {
     /// values: long-run variance 5 times the white one): a factor near 5.
     #[test]
     fn smooth_residuals_inflate_sigma_by_their_long_run_variance() {
-        let basis = Basis::new(3, 40, 800.0, true).unwrap();
-        let proj = {
-            let b = bins_of(&vec![0.0; 800]);
-            Projection::new(&b, &basis, 1.0).unwrap()
-        };
+        let basis = closed_basis();
+        let proj = unit_projection(&basis);
         let mut rng = Rng::new(5);
         let white: Vec<f64> = (0..800).map(|_| rng.normal()).collect();
         // Variance 1 per bin, lag-k correlation (5 - k) / 5.
