@@ -6,6 +6,8 @@
 use super::build::{Candidate, Foot, Pixels};
 use super::raster::{unpack, Chords, GridShape};
 use super::{BandScratch, MIN_JACOBIAN};
+use crate::curve::Clearance;
+use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
 /// Cells of the band's grid per parallel task of the exact projection.
@@ -46,7 +48,11 @@ impl Pixels<'_> {
         cutoff2: f64,
     ) -> Vec<Vec<Candidate>> {
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
-        let clearances = self.curve.corner_clearances();
+        let blur = match self.profile {
+            Profile::PixelEdge { blur } => blur,
+            Profile::Paper { .. } => 0.0,
+        };
+        let clearances = self.curve.corner_clearances(blur);
         let cell = CellSearch {
             grid,
             nearest,
@@ -85,10 +91,11 @@ impl Pixels<'_> {
         if pr.at_end || pr.r.abs() >= self.reach || jacobian <= MIN_JACOBIAN {
             return None;
         }
+        let (length, closed) = (self.curve.param_length(), self.curve.is_closed());
         if cell
             .clearances
             .iter()
-            .any(|(v, radius)| (x - v[0]).hypot(y - v[1]) < *radius)
+            .any(|c| c.covers([x, y], pr.u, length, closed))
         {
             return None;
         }
@@ -110,5 +117,5 @@ struct CellSearch<'a> {
     grid: &'a GridShape,
     nearest: &'a [u64],
     cutoff2: f64,
-    clearances: &'a [([f64; 2], f64)],
+    clearances: &'a [Clearance],
 }

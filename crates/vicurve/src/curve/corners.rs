@@ -21,12 +21,18 @@
 //!   elements) the projection is also started from both sides of the
 //!   corner and the nearest foot wins, so that the band assigns each pixel
 //!   to the side it is really closest to, whatever its start.
-//! * A pixel near the vertex sees both sides (its square is crossed by
-//!   both, or by a side that ends inside it), which no one-edge virtual
-//!   profile models: [`SplineCurve::corner_clearances`] gives the discs
-//!   around the vertices inside which the band leaves pixels out (radius
-//!   `CORNER_CLEARANCE / sin(theta / 2)` for an interior angle `theta`: the
-//!   points within `CORNER_CLEARANCE` of both sides).
+//! * A pixel near a corner may see the other side's edge, which no
+//!   one-edge virtual profile models: its square is crossed by both
+//!   sides, or, through a blur, the other edge reaches it. A pixel on one
+//!   side sees the difference between the one-edge image it is modelled
+//!   by and the corner's: the region between the other side and this
+//!   side's extension beyond the vertex (the wedge between the rays from
+//!   the vertex along the two sides' tangents, forward for a pixel before
+//!   the corner and backward for one after it, for convex and concave
+//!   corners alike). [`SplineCurve::corner_clearances`] gives each
+//!   corner's [`Clearance`], and the band leaves out the pixels within
+//!   `CORNER_CLEARANCE + BLUR_CLEARANCE * blur` of that wedge; the sides
+//!   are then measured from the pixels beyond, and meet at the corner.
 
 /// Distance from both sides of a corner within which a pixel is left out
 /// of the band, pixels: a pixel's square reaches `sqrt(2) / 2` px from its
@@ -34,8 +40,87 @@
 /// pulled towards each other (by about 2e-2 px on the square of
 /// `tests/breaks.rs`, measured once while developing; not asserted).
 pub(crate) const CORNER_CLEARANCE: f64 = 1.0;
-/// Largest clearance radius (very sharp corners), pixels.
-const MAX_CLEARANCE_RADIUS: f64 = 8.0;
+/// Blur widths (the Gaussian's standard deviation) added to
+/// [`CORNER_CLEARANCE`]. At 2 of them the other side's blurred edge still
+/// adds 2.3 % of the contrast, but the sides are then extrapolated over a
+/// shorter stretch: wider clearances measured worse corners through noise
+/// (the sweep's `polygon-breaks` cases, see `docs/breaks.md`).
+pub(crate) const BLUR_CLEARANCE: f64 = 2.0;
+/// Pixels farther from the vertex than this many clearance distances are
+/// never left out: along a very sharp spike the other side runs beside
+/// this one for its whole length.
+const MAX_CLEARANCE_RATIO: f64 = 8.0;
+
+/// A corner as the band's pixels must clear it (see the module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct Clearance {
+    /// The vertex, pixels.
+    pub vertex: [f64; 2],
+    /// Its parameter on the curve, pixels.
+    pub at: f64,
+    /// Unit tangent of the side that ends at the vertex.
+    pub into: [f64; 2],
+    /// Unit tangent of the side that starts there.
+    pub out: [f64; 2],
+    /// Distance kept from the other side's edge, pixels.
+    pub distance: f64,
+}
+
+impl Clearance {
+    /// Whether the pixel at `x`, whose closest point on the curve is at
+    /// parameter `u`, sees the other side's edge; `length` and `closed`
+    /// are the curve's (a closed curve's parameter wraps round).
+    pub fn covers(&self, x: [f64; 2], u: f64, length: f64, closed: bool) -> bool {
+        let p = [x[0] - self.vertex[0], x[1] - self.vertex[1]];
+        if p[0].hypot(p[1]) >= MAX_CLEARANCE_RATIO * self.distance {
+            return false;
+        }
+        let mut delta = u - self.at;
+        if closed {
+            delta = (delta + 0.5 * length).rem_euclid(length) - 0.5 * length;
+        }
+        let (a, b) = if delta < 0.0 {
+            (self.into, self.out)
+        } else {
+            (neg(self.into), neg(self.out))
+        };
+        distance_to_wedge(p, a, b) < self.distance
+    }
+}
+
+/// `-v`.
+fn neg(v: [f64; 2]) -> [f64; 2] {
+    [-v[0], -v[1]]
+}
+
+/// `a x b` (z component).
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// Distance from `p` to the wedge between the rays from the origin along
+/// the unit vectors `a` and `b` (the smaller angle between them; a ray
+/// when they agree), pixels.
+fn distance_to_wedge(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let turn = cross(a, b);
+    let (pa, pb) = (cross(a, p), cross(p, b));
+    let inside = if turn >= 0.0 {
+        pa >= 0.0 && pb >= 0.0
+    } else {
+        pa <= 0.0 && pb <= 0.0
+    };
+    if inside {
+        return 0.0;
+    }
+    let to_ray = |d: [f64; 2]| {
+        if p[0] * d[0] + p[1] * d[1] <= 0.0 {
+            p[0].hypot(p[1])
+        } else {
+            cross(d, p).abs()
+        }
+    };
+    to_ray(a).min(to_ray(b))
+}
 
 use super::project::Projection;
 use super::{frame_from, SplineCurve};
@@ -47,21 +132,26 @@ impl SplineCurve {
         &self.corners
     }
 
-    /// The vertices of the corners and the radius around each inside which
-    /// band pixels are left out (the reasons are in `curve/corners.rs`).
-    pub fn corner_clearances(&self) -> Vec<([f64; 2], f64)> {
+    /// The corners' [`Clearance`]s for an edge seen through a Gaussian blur
+    /// of `blur` px (0: sharp; the reasons are in `curve/corners.rs`).
+    pub fn corner_clearances(&self, blur: f64) -> Vec<Clearance> {
+        let distance = CORNER_CLEARANCE + BLUR_CLEARANCE * blur.max(0.0);
+        let unit = |v: [f64; 2]| {
+            let n = v[0].hypot(v[1]).max(1e-300);
+            [v[0] / n, v[1] / n]
+        };
         self.corners
             .iter()
             .map(|&c| {
-                let [p, right, _] = self.derivatives(c);
+                let [vertex, right, _] = self.derivatives(c);
                 let left = self.derivatives_left(c)[1];
-                let (nl, nr) = (left[0].hypot(left[1]), right[0].hypot(right[1]));
-                // cos of the turning angle; sin(theta / 2) = cos(turn / 2).
-                let cos_turn = ((left[0] * right[0] + left[1] * right[1]) / (nl * nr).max(1e-300))
-                    .clamp(-1.0, 1.0);
-                let half = (0.5 * (1.0 + cos_turn)).sqrt();
-                let radius = (CORNER_CLEARANCE / half.max(1e-9)).min(MAX_CLEARANCE_RADIUS);
-                (p, radius)
+                Clearance {
+                    vertex,
+                    at: c,
+                    into: unit(left),
+                    out: unit(right),
+                    distance,
+                }
             })
             .collect()
     }

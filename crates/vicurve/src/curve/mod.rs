@@ -19,6 +19,7 @@ mod corners;
 pub mod init;
 mod project;
 
+pub use corners::Clearance;
 pub use init::InitialCurve;
 
 use crate::error::{Error, Result};
@@ -138,7 +139,9 @@ impl SplineCurve {
     /// is `C^0` there and its tangent may break) at that point's chord-length
     /// parameter. Without corners this is [`SplineCurve::fit`]. A corner
     /// at the first point of an open curve or at its last is ignored (the
-    /// ends are breaks already); out-of-range indices are errors.
+    /// ends are breaks already); out-of-range indices are errors. A closed
+    /// curve with corners starts at its first corner (after the
+    /// re-orientation): see [`start_at_first_corner`].
     pub fn fit_with_corners(
         points: &[[f64; 2]],
         closed: bool,
@@ -196,6 +199,9 @@ impl SplineCurve {
             // Point k is now n - 1 - k; the curve starts at the old last one.
             let n = pts.len();
             corner_at.iter_mut().for_each(|k| *k = n - 1 - *k);
+        }
+        if closed {
+            start_at_first_corner(&mut pts, &mut corner_at);
         }
         let mut params = Vec::with_capacity(pts.len());
         let mut acc = 0.0;
@@ -504,4 +510,21 @@ fn gauss_legendre(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
     let c = 0.5 * (a + b);
     let r = 0.5 * (b - a);
     X.iter().zip(W).map(|(x, w)| w * f(c + r * x)).sum::<f64>() * r
+}
+
+/// A closed polyline `pts` with corners at the point indices `corners`
+/// turned to start at the corner of smallest index (unchanged without
+/// corners). A displacement basis on the curve has an element boundary at
+/// the parameter origin as well as at each corner, so an origin just short
+/// of a corner would leave an element of a fraction of a pixel there,
+/// inside the corner's clearance: no band pixel on it, a singular system.
+fn start_at_first_corner(pts: &mut [[f64; 2]], corners: &mut [usize]) {
+    let Some(&first) = corners.iter().min() else {
+        return;
+    };
+    let n = pts.len();
+    pts.rotate_left(first);
+    for c in corners.iter_mut() {
+        *c = (*c + n - first) % n;
+    }
 }

@@ -2,7 +2,7 @@
 //! exact circles and brute force.
 
 use proptest::prelude::*;
-use vicurve::curve::{InitialCurve, SplineCurve};
+use vicurve::curve::{Clearance, InitialCurve, SplineCurve};
 
 fn circle(cx: f64, cy: f64, r: f64) -> SplineCurve {
     InitialCurve::Circle { cx, cy, r }.to_curve().unwrap()
@@ -172,4 +172,70 @@ proptest! {
             prop_assert!((p.r - off).abs() < 1e-9);
         }
     }
+}
+
+/// A closed curve with corners starts at one of them, whatever point the
+/// polyline starts at, so that no element is cut short at the origin.
+#[test]
+fn closed_curve_with_corners_starts_at_a_corner() {
+    // A square, counterclockwise on screen, its first point just short of
+    // the corner at index 4.
+    let mut pts = Vec::new();
+    let corners_xy = [[10.0, 10.0], [10.0, 50.0], [50.0, 50.0], [50.0, 10.0]];
+    for k in 0..4 {
+        let (a, b) = (corners_xy[k], corners_xy[(k + 1) % 4]);
+        for i in 0..40 {
+            let t = i as f64 / 40.0;
+            pts.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    }
+    pts.rotate_left(39);
+    let corners: Vec<usize> = [1, 41, 81, 121].to_vec();
+    let curve = SplineCurve::fit_with_corners(&pts, true, 3, 2.0, &corners).unwrap();
+    assert_eq!(curve.corners().len(), 4);
+    assert_eq!(curve.corners()[0], 0.0, "corners at {:?}", curve.corners());
+    let p = curve.point(0.0);
+    let nearest = corners_xy
+        .iter()
+        .map(|c| (p[0] - c[0]).hypot(p[1] - c[1]))
+        .fold(f64::INFINITY, f64::min);
+    assert!(nearest < 1e-9, "origin {p:?} is no vertex");
+}
+
+/// The pixels a corner's clearance leaves out: those near the region
+/// between the other side and this side's extension, on either side of
+/// the vertex; not those along the side, away from the vertex.
+#[test]
+fn a_corner_clears_the_pixels_that_see_the_other_side() {
+    // A right-angled corner at the origin: the side along +x ends there,
+    // the next leaves along +y (a left turn); 1 px kept clear.
+    let c = Clearance {
+        vertex: [0.0, 0.0],
+        at: 100.0,
+        into: [1.0, 0.0],
+        out: [0.0, 1.0],
+        distance: 1.0,
+    };
+    let (length, closed) = (400.0, true);
+    // Before the corner (foot on the first side): near the vertex, and
+    // beside the second side, inside.
+    assert!(c.covers([-0.5, 0.3], 99.5, length, closed));
+    assert!(c.covers([-0.8, 3.0], 99.2, length, closed));
+    // Before it but 2 px from the vertex, along the side: clear.
+    assert!(!c.covers([-2.0, 0.0], 98.0, length, closed));
+    assert!(!c.covers([-2.0, -0.5], 98.0, length, closed));
+    // After the corner (foot on the second side): mirrored.
+    assert!(c.covers([0.3, -0.5], 100.5, length, closed));
+    assert!(!c.covers([0.0, 2.0], 102.0, length, closed));
+    // A closed curve's parameter wraps: a corner at 0 and a foot at 399.
+    let at_origin = Clearance { at: 0.0, ..c };
+    assert!(at_origin.covers([-0.5, 0.3], 399.5, length, closed));
+    assert!(!at_origin.covers([-3.0, 0.0], 397.0, length, closed));
+    // An almost straight corner clears about the distance round the vertex.
+    let straight = Clearance {
+        out: [0.9998, 0.02],
+        ..c
+    };
+    assert!(straight.covers([-0.9, 0.0], 99.1, length, closed));
+    assert!(!straight.covers([-1.1, 0.0], 98.9, length, closed));
 }

@@ -8,6 +8,10 @@ use vicurve::fit::{measure, FitConfig, Outcome};
 use vicurve::image::Image;
 use vicurve::render::coverage::polygon_coverage;
 
+/// Largest error (px) on the blurred square of
+/// `blurred_square_keeps_its_corners`.
+const BLURRED_MAX_ERROR: f64 = 0.05;
+
 /// Square of half-diagonal `r` about `(cx, cy)`, turned by `phase`,
 /// counterclockwise on screen.
 fn square(cx: f64, cy: f64, r: f64, phase: f64) -> Vec<[f64; 2]> {
@@ -119,6 +123,32 @@ fn square_with_breaks_at_its_corners() {
         corner0 > 0.1 && corner0 > 10.0 * corner,
         "without breaks the corners should be cut: {corner0} vs {corner} px"
     );
+}
+
+/// Through a blur each side's edge reaches the pixels near the other: the
+/// band clears them by a distance that grows with the blur, and the
+/// blurred square's corners are measured as well as the sharp one's.
+#[test]
+fn blurred_square_keeps_its_corners() {
+    let truth = square(100.3, 99.6, 60.0, 0.3);
+    let image = vicurve::render::blur::gaussian_blur(&image_of(&truth, 200), 1.5).unwrap();
+    let start = square(101.5, 98.8, 56.0, 0.27);
+    let side = (start[1][0] - start[0][0]).hypot(start[1][1] - start[0][1]);
+    let init = InitialCurve::Polyline {
+        points: start,
+        closed: true,
+    };
+    let config = FitConfig {
+        breaks: (0..4).map(|k| k as f64 * side).collect(),
+        ..FitConfig::default()
+    };
+    let m = measure(&image, &init, &config).expect("measure with breaks");
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert_eq!(m.curve.corners().len(), 4);
+    let pts: Vec<[f64; 2]> = m.samples.iter().map(|s| [s.x, s.y]).collect();
+    let (all, corner) = errors(&truth, &pts);
+    println!("blur 1.5 px: max error {all:.2e} px, near the corners {corner:.2e} px");
+    assert!(all <= BLURRED_MAX_ERROR, "max error {all} px");
 }
 
 /// An open curve round one corner of a large square (its other corners
