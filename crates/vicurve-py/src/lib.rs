@@ -22,6 +22,7 @@ mod functions;
 mod image_arg;
 mod json;
 mod result;
+mod track;
 
 use pyo3::prelude::*;
 
@@ -42,5 +43,8 @@ fn _vicurve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(functions::basis_values, m)?)?;
     m.add_function(wrap_pyfunction!(functions::interpolate, m)?)?;
+    m.add_class::<track::Tracker>()?;
+    m.add_class::<track::TrackedFrame>()?;
+    m.add_function(wrap_pyfunction!(track::track, m)?)?;
     Ok(())
 }

@@ -25,6 +25,7 @@ pub mod nurbs;
 pub mod psf;
 pub mod render;
 pub mod report;
+pub mod sequence;
 pub mod solver;
 pub mod spline;
 pub mod start;

@@ -9,5 +9,6 @@ mod diagnostics;
 mod export;
 mod golden;
 mod speed;
+mod stack;
 mod start;
 mod track;

@@ -25,6 +25,8 @@ basis_values(degree, n_elements, length, closed, s) -> ndarray
     The engine's uniform B-spline basis, for checks and plots.
 interpolate(image, xs, ys, kind="cubic") -> ndarray
     The engine's image interpolation (cubic B-spline, bilinear, Keys).
+track(frames, init, ...) -> Tracker
+    Track a curve through a sequence; iterate for one TrackedFrame per frame.
 
 Images are 2-D NumPy arrays (``uint8`` divided by 255, ``uint16`` by 65535,
 ``float32``/``float64`` taken as they are, exactly as image files are read)
@@ -35,10 +37,9 @@ parameters, images or curves, ``FitError`` (a ``RuntimeError``) for a fit
 that diverged, with the partial result in its ``result`` attribute; a fit
 that reached its iteration limit returns with a ``RuntimeWarning``.
 
-Not available: tracking a curve through a sequence of images. The engine has
-no tracking yet, so there is no ``vicurve.track``; to follow a curve, measure
-each image starting from the previous result (``Polyline(result.points,
-closed=...)``).
+Sequences: ``track(frames, init, ...)`` follows a curve through a 3-D array,
+a list of arrays or paths, a glob or a multi-page TIFF, each frame started from
+the previous result as ``vicurve track`` does, yielding one frame at a time.
 
 Example::
 
@@ -62,6 +63,7 @@ from ._vicurve import (
     interpolate,
     measure,
     synth,
+    track,
 )
 
 __all__ = [
@@ -77,4 +79,5 @@ __all__ = [
     "interpolate",
     "measure",
     "synth",
+    "track",
 ]

@@ -22,5 +22,6 @@ mod realistic;
 mod render;
 mod solver;
 mod spline;
+mod stack;
 mod start;
 mod truth;
