@@ -30,7 +30,7 @@ mod plot;
 mod sequence;
 
 use clap::{Parser, Subcommand};
-use commands::{bench, demo, eval, export, measure, mesh, run, synth, track};
+use commands::{bench, demo, eval, export, measure, merge, mesh, run, synth, track};
 use failure::{one_line, Failure};
 use std::process::ExitCode;
 
@@ -61,6 +61,8 @@ enum Command {
     Track(track::Args),
     /// Run a job file (TOML): images, named curves, widths, outputs.
     Run(run::Args),
+    /// Join the parts of a job run with `run --shard K/N` into one summary.
+    Merge(merge::Args),
     /// Export a measured curve from its result file: DXF SPLINE (CAD),
     /// SVG of exact cubic Béziers.
     Export(export::Args),
@@ -78,6 +80,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::run(a),
         Command::Track(a) => track::run(a),
         Command::Run(a) => run::run(a),
+        Command::Merge(a) => merge::run(a),
         Command::Export(a) => export::run(a),
         Command::Mesh(a) => mesh::run(a),
     };

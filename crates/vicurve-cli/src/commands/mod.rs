@@ -6,6 +6,7 @@ pub mod demo;
 pub mod eval;
 pub mod export;
 pub mod measure;
+pub mod merge;
 pub mod mesh;
 pub mod run;
 pub mod synth;

@@ -84,6 +84,7 @@ fn build(args: &Args) -> Result<Job, Failure> {
             overlay,
             plots: false,
         },
+        shard: None,
     };
     job::check(&job)?;
     Ok(job)

@@ -176,6 +176,64 @@ pub struct Job {
     pub curves: Vec<CurveSpec>,
     pub widths: Vec<WidthSpec>,
     pub outputs: JobOutputs,
+    /// The part of a larger job these frames are (`run --shard K/N`).
+    pub shard: Option<Shard>,
+}
+
+/// Part `index` (from 1) of `count` of a job whose frames start at
+/// `first` of the whole job's (`run --shard K/N`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+    pub first: usize,
+}
+
+impl Shard {
+    /// `summary.shard-K-of-N.csv`, the part's summary (`merge` joins them).
+    pub fn summary_name(&self) -> String {
+        format!("{SUMMARY_STEM}.shard-{}-of-{}.csv", self.index, self.count)
+    }
+}
+
+/// `K/N` with `1 <= K <= N`.
+pub fn parse_shard(text: &str) -> Result<(usize, usize), Failure> {
+    let bad = || {
+        Failure::Error(format!(
+            "--shard '{text}': expected K/N with 1 <= K <= N, such as 3/10"
+        ))
+    };
+    let (k, n) = text.split_once('/').ok_or_else(bad)?;
+    let (k, n): (usize, usize) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if k == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// Keep part `k` of `n` of the job's frames: the frames split evenly in
+/// order (part `k` has frames `(k-1) T / N` to `k T / N`). A tracked job
+/// is one sequence, each frame started from the one before: it cannot be
+/// split without changing its results, so it is one part (split a
+/// campaign of sequences by giving each its own job file).
+pub fn shard(job: &mut Job, k: usize, n: usize) -> Result<(), Failure> {
+    if job.track && n > 1 {
+        return Err(Failure::Error(
+            "--shard: a tracked job is one sequence (each frame starts from the one before) and cannot be split; give each sequence its own job file, or set track = false for independent frames".into(),
+        ));
+    }
+    let total = job.images.len();
+    let (first, end) = ((k - 1) * total / n, k * total / n);
+    job.images = job.images[first..end].to_vec();
+    job.shard = Some(Shard {
+        index: k,
+        count: n,
+        first,
+    });
+    Ok(())
 }
 
 /// One curve to measure on every frame.
@@ -295,6 +353,7 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
             overlay,
             plots: file.outputs.plots,
         },
+        shard: None,
     };
     check(&job)?;
     Ok(job)

@@ -26,6 +26,7 @@
 pub mod frame;
 pub mod frames;
 pub mod job;
+pub mod merge;
 mod plots;
 mod progress;
 mod resume;
@@ -79,7 +80,11 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         (serde_json::to_string_pretty(&manifest_text).unwrap_or_default() + "\n").as_bytes(),
     )?;
 
-    let summary_path = dir.join(format!("{SUMMARY_STEM}.csv"));
+    let summary_path = dir.join(match &job.shard {
+        None => format!("{SUMMARY_STEM}.csv"),
+        Some(s) => s.summary_name(),
+    });
+    let offset = job.shard.map_or(0, |s| s.first);
     let mut old_rows = if force {
         HashMap::new()
     } else {
@@ -138,7 +143,16 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         // (a frame's fit leaves a core idle part of the time).
         let next = (i + 1..total).find(|&k| !done[k]);
         let (out, next_decoded) = rayon::join(
-            || measure_frame(job, &fingerprint, i, (frame, decoded), &files, &tracking),
+            || {
+                measure_frame(
+                    job,
+                    &fingerprint,
+                    offset + i,
+                    (frame, decoded),
+                    &files,
+                    &tracking,
+                )
+            },
             || next.map(|k| (k, job.images[k].decode())),
         );
         prefetched = next_decoded;
@@ -174,7 +188,7 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
             "vicurve: {skipped} frame(s) already done, skipped (--force measures them again); {measured} measured"
         );
     }
-    if job.outputs.plots {
+    if job.outputs.plots && job.shard.is_none() {
         if let Err(e) = plots::write_plots(job, &stems, &lines) {
             eprintln!("vicurve: warning: {e}");
         }
