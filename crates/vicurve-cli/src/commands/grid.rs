@@ -42,6 +42,10 @@ pub struct Args {
     /// Write the strains and the configuration as JSON.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Write the forming-limit scatter (eps2 horizontal, eps1 vertical,
+    /// two-sigma error bars) as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub fld: Option<PathBuf>,
 }
 
 /// The JSON of `grid --out`.
@@ -115,8 +119,15 @@ pub fn run(args: Args) -> Result<(), Failure> {
             first.get_or_insert(e);
         }
     }
+    if let Some(p) = &args.fld {
+        let measured: Vec<&GridStrain> = strains.iter().flatten().collect();
+        let title = format!("{input}: {} circles, D0 = {d0:.2} px", measured.len());
+        if let Err(e) = crate::plot::fld::write_fld_svg(p, &measured, &title) {
+            first.get_or_insert(e);
+        }
+    }
     summary(&all);
-    if args.table.is_none() && args.out.is_none() {
+    if args.table.is_none() && args.out.is_none() && args.fld.is_none() {
         print_strains(&strains);
     }
     if let Some(e) = first {

@@ -122,6 +122,7 @@ fn grid_strains_from_a_synthetic_grid() {
         "synth", "grid", "--out", &img, "--truth", &truth,
     ]));
     let table = p(d, "strains.csv");
+    let fld = p(d, "fld.svg");
     ok(&vicurve(&[
         "grid",
         &img,
@@ -129,7 +130,11 @@ fn grid_strains_from_a_synthetic_grid() {
         "30",
         "--table",
         &table,
+        "--fld",
+        &fld,
     ]));
+    let svg = std::fs::read_to_string(&fld).unwrap();
+    assert_eq!(svg.matches(r#"class="circle""#).count(), 100);
     let rows = csv(&table);
     assert_eq!(rows.len() - 1, 100);
     let col = |n: &str| rows[0].iter().position(|c| c == n).unwrap();
