@@ -15,6 +15,7 @@
 
 #![deny(missing_docs)]
 
+mod all;
 pub mod args;
 mod curves;
 mod errors;
@@ -39,6 +40,7 @@ fn _vicurve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<curves::Auto>()?;
     m.add_class::<result::PyMeasurement>()?;
     m.add_function(wrap_pyfunction!(functions::measure, m)?)?;
+    m.add_function(wrap_pyfunction!(all::measure_all, m)?)?;
     m.add_function(wrap_pyfunction!(functions::synth, m)?)?;
     m.add_function(wrap_pyfunction!(functions::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(functions::basis_values, m)?)?;

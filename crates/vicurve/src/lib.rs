@@ -22,6 +22,7 @@ pub mod io;
 pub mod measurement;
 pub mod model;
 pub mod nurbs;
+pub mod objects;
 pub mod psf;
 pub mod render;
 pub mod report;

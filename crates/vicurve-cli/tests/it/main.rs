@@ -8,6 +8,7 @@ mod conformance;
 mod diagnostics;
 mod export;
 mod golden;
+mod objects;
 mod shard;
 mod speed;
 mod stack;

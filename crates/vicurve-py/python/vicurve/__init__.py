@@ -65,6 +65,7 @@ from ._vicurve import (
     synth,
     track,
 )
+from ._vicurve import measure_all as _measure_all
 
 __all__ = [
     "Auto",
@@ -78,6 +79,30 @@ __all__ = [
     "eval",
     "interpolate",
     "measure",
+    "measure_all",
     "synth",
     "track",
 ]
+
+
+def measure_all(image, **kwargs):
+    """Measure every object of ``image``; returns ``(results, table)``.
+
+    ``results`` has one ``Result`` per object (None when it could not be
+    measured at all), numbered row-major by centroid; ``table`` one row per
+    object: a pandas DataFrame when pandas is installed, else a dict of
+    NumPy arrays. Keywords: ``polarity``, ``model``, ``min_length``,
+    ``min_area``, ``roi``, ``include_border`` (see ``_vicurve.measure_all``).
+    """
+    import numpy as np
+
+    results, columns = _measure_all(image, **kwargs)
+    table = {
+        k: (np.array(v, dtype=str) if k in ("outcome", "message") else v)
+        for k, v in columns.items()
+    }
+    try:
+        import pandas as pd
+    except ImportError:
+        return results, table
+    return results, pd.DataFrame(table)

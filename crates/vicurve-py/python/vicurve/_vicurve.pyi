@@ -191,6 +191,20 @@ def measure(
     arguments, ``FileNotFoundError`` for a missing file.
     """
 
+def measure_all(
+    image: _ImageLike,
+    *,
+    polarity: str = "auto",
+    model: Optional[str] = None,
+    min_length: Optional[float] = None,
+    min_area: Optional[float] = None,
+    roi: Optional[Tuple[float, float, float, float]] = None,
+    include_border: bool = False,
+) -> Tuple[List[Optional[Result]], Dict[str, Any]]:
+    """Every object of ``image``: one ``Result`` (or None) per object and
+    the table as a dict of NumPy arrays (``vicurve.measure_all`` makes it a
+    DataFrame when pandas is installed)."""
+
 def synth(
     shape: _ShapeName,
     *,

@@ -17,6 +17,7 @@ mod io;
 mod levelset;
 mod model;
 mod nurbs;
+mod objects;
 mod psf;
 mod realistic;
 mod render;
