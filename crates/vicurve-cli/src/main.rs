@@ -30,7 +30,7 @@ mod plot;
 mod sequence;
 
 use clap::{Parser, Subcommand};
-use commands::{bench, demo, eval, export, measure, mesh, run, synth, track};
+use commands::{bench, demo, eval, export, grid, measure, merge, mesh, run, synth, track};
 use failure::{one_line, Failure};
 use std::process::ExitCode;
 
@@ -46,7 +46,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Measure a curve in an image from a starting curve.
-    Measure(measure::Args),
+    Measure(Box<measure::Args>),
     /// Render a test image with exactly known geometry (and its truth file).
     Synth(synth::Args),
     /// Compare measured points with a truth file: bias, scatter, max error.
@@ -61,25 +61,32 @@ enum Command {
     Track(track::Args),
     /// Run a job file (TOML): images, named curves, widths, outputs.
     Run(run::Args),
+    /// Join the parts of a job run with `run --shard K/N` into one summary.
+    Merge(merge::Args),
     /// Export a measured curve from its result file: DXF SPLINE (CAD),
     /// SVG of exact cubic Béziers.
     Export(export::Args),
     /// The NURBS surface patch between two measured edges: JSON, VTK (.vtu).
     Mesh(mesh::Args),
+    /// Circle-grid strain analysis: every printed circle measured as an
+    /// ellipse, its true strains with their uncertainties.
+    Grid(grid::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Measure(a) => measure::run(a),
+        Command::Measure(a) => measure::run(*a),
         Command::Synth(a) => synth::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Demo(a) => demo::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Track(a) => track::run(a),
         Command::Run(a) => run::run(a),
+        Command::Merge(a) => merge::run(a),
         Command::Export(a) => export::run(a),
         Command::Mesh(a) => mesh::run(a),
+        Command::Grid(a) => grid::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

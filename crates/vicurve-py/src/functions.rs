@@ -23,14 +23,14 @@ use vicurve::spline::Basis;
 use vicurve::truth::Kind;
 
 /// A non-negative integer argument as `usize`.
-fn count(name: &str, v: i64) -> PyResult<usize> {
+pub(crate) fn count(name: &str, v: i64) -> PyResult<usize> {
     usize::try_from(v).map_err(|_| value_error(format!("invalid {name}: {v} (must be >= 0)")))
 }
 
 /// `stages=`: None (the default schedule), the command line's text
 /// `"20:25,10:50"`, or a sequence of `(R, elements)` pairs where elements
 /// is a number of elements or the text `"40px"` / `"auto"`.
-fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Stage>>> {
+pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Stage>>> {
     let Some(obj) = obj else {
         return Ok(None);
     };

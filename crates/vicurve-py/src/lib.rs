@@ -15,6 +15,7 @@
 
 #![deny(missing_docs)]
 
+mod all;
 pub mod args;
 mod curves;
 mod errors;
@@ -22,6 +23,7 @@ mod functions;
 mod image_arg;
 mod json;
 mod result;
+mod track;
 
 use pyo3::prelude::*;
 
@@ -38,9 +40,13 @@ fn _vicurve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<curves::Auto>()?;
     m.add_class::<result::PyMeasurement>()?;
     m.add_function(wrap_pyfunction!(functions::measure, m)?)?;
+    m.add_function(wrap_pyfunction!(all::measure_all, m)?)?;
     m.add_function(wrap_pyfunction!(functions::synth, m)?)?;
     m.add_function(wrap_pyfunction!(functions::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(functions::basis_values, m)?)?;
     m.add_function(wrap_pyfunction!(functions::interpolate, m)?)?;
+    m.add_class::<track::Tracker>()?;
+    m.add_class::<track::TrackedFrame>()?;
+    m.add_function(wrap_pyfunction!(track::track, m)?)?;
     Ok(())
 }

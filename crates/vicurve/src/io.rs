@@ -7,6 +7,11 @@
 //!
 //! Polylines: CSV text, one point `x,y` (pixels, x = column, y = row, see
 //! [`crate::image`]) per row; see [`parse_polyline_csv`].
+//!
+//! Multi-page TIFF stacks, page by page: [`stack`].
+
+pub mod stack;
+pub use stack::{page_count, TiffStack};
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Write};
@@ -35,7 +40,7 @@ const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
 /// against a profile fitted to the image itself), so linearising would add
 /// nothing but an assumption about the file's colour space. Alpha is
 /// ignored (a gray+alpha image gives its gray channel). TIFF: the first page
-/// only.
+/// only ([`TiffStack`] reads the others).
 ///
 /// The format is recognised from the content (magic bytes), so a misnamed
 /// file is still read and a non-image named `.png` is rejected.
@@ -260,18 +265,21 @@ pub fn read_polyline_csv(path: &Path) -> Result<Vec<[f64; 2]>> {
 
 /// The whole file, with "missing" told apart from other failures.
 fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|source| {
-        if source.kind() == std::io::ErrorKind::NotFound {
-            Error::NotFound {
-                path: path.to_path_buf(),
-            }
-        } else {
-            Error::Io {
-                path: path.to_path_buf(),
-                source,
-            }
+    std::fs::read(path).map_err(|source| read_file_error(path, source))
+}
+
+/// [`Error::NotFound`] or [`Error::Io`] for a file that cannot be read.
+fn read_file_error(path: &Path, source: std::io::Error) -> Error {
+    if source.kind() == std::io::ErrorKind::NotFound {
+        Error::NotFound {
+            path: path.to_path_buf(),
         }
-    })
+    } else {
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
 }
 
 /// PNG, JPEG or TIFF (including BigTIFF) from the first bytes; anything

@@ -12,13 +12,16 @@
 //!   ([`BandArgs`]), turned into [`vicurve::fit::FitConfig`];
 //! - [`start`]: `measure`'s start (`--init`, `--pick`, `--roi`, `--grow`);
 //! - [`files`]: the output files of a measurement and its CAD exports;
-//! - [`synth`]: the options of `synth`.
+//! - [`synth`]: the options of `synth`;
+//! - [`all`]: `measure --all` and `grid`.
 
+pub mod all;
 pub mod curve;
 pub mod files;
 pub mod start;
 pub mod synth;
 
+pub use all::AllArgs;
 pub use curve::{BandArgs, CurveArgs};
 pub use files::{CurveFiles, Outputs};
 pub use start::StartArgs;

@@ -28,6 +28,16 @@ pub enum ShapeName {
     /// measures them (`job.toml`, for `vicurve run`). Defaults: 400x200,
     /// 8 frames, blur 1.5, noise 0.001, 16 bits.
     Necking,
+    /// Many shapes in one image by exact coverage: 50 discs and ellipses
+    /// (semi-axes 10 to 25 px) 8 px apart, 20 specks (radius 1 to 3 px), 5
+    /// discs cut by the border; `--truth` lists each shape and its role.
+    /// Defaults: 1024x768, blur 1, noise 0.01, 8 bits.
+    Scene,
+    /// A 10x10 grid of circles of diameter 2 x `--radius` (default 15 px),
+    /// 60 px apart, each deformed into an exact ellipse by a known smooth
+    /// strain field; `--truth` gives every ellipse and its strains.
+    /// Defaults: blur 1, noise 0.01, 8 bits.
+    Grid,
 }
 
 /// Gray levels BACKGROUND,FOREGROUND when not given.

@@ -1,6 +1,6 @@
 //! `vicurve measure`: one curve in one image.
 
-use crate::args::{BandArgs, CurveArgs, CurveFiles, Outputs, StartArgs};
+use crate::args::{AllArgs, BandArgs, CurveArgs, CurveFiles, Outputs, StartArgs};
 use crate::failure::{finish, Failure};
 use crate::measure_start::{explicit, grow_from, initial_curve};
 use crate::output::measurement::{print_summary, write_outputs, Measured};
@@ -39,9 +39,15 @@ pub struct Args {
     pub diagnostics: Option<PathBuf>,
     #[command(flatten)]
     pub cad: CurveFiles,
+    #[command(flatten)]
+    pub all: AllArgs,
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    args.all.check()?;
+    if args.all.all {
+        return super::measure_all::run(args);
+    }
     let mut config = args.curve.config()?;
     args.band.apply(&mut config)?;
     config.validate()?;

@@ -14,9 +14,19 @@ pub struct Args {
     /// folder (by default a re-run skips them).
     #[arg(long)]
     pub force: bool,
+    /// Measure part K of N of the frames (`--shard 3/10`, K from 1): an
+    /// untracked job's frames split evenly in order. The frames' files go
+    /// to the job's output folder, the part's rows to
+    /// `summary.shard-K-of-N.csv`; `vicurve merge` joins the parts.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
-    let job = crate::sequence::job::load(&args.job)?;
+    let mut job = crate::sequence::job::load(&args.job)?;
+    if let Some(text) = &args.shard {
+        let (k, n) = crate::sequence::job::parse_shard(text)?;
+        crate::sequence::job::shard(&mut job, k, n)?;
+    }
     crate::sequence::run(&job, args.force)
 }

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     /// The frames: a glob pattern (quote it: `'frames/*.tif'`), sorted by
-    /// name, or several files in order.
+    /// name, or several files in order. A multi-page TIFF stands for its
+    /// pages, frame `STEM_0000` the first.
     #[arg(required = true)]
     pub images: Vec<String>,
     /// Starting curve of the first frame, as for `measure`:
@@ -73,7 +74,7 @@ fn build(args: &Args) -> Result<Job, Failure> {
         Some(o) => Some(job::parse_overlay(o)?),
     };
     let job = Job {
-        images,
+        images: crate::sequence::frames::frames(images)?,
         out_dir: args.out_dir.clone(),
         track: !args.no_tracking,
         curves: vec![spec],
@@ -83,6 +84,7 @@ fn build(args: &Args) -> Result<Job, Failure> {
             overlay,
             plots: false,
         },
+        shard: None,
     };
     job::check(&job)?;
     Ok(job)

@@ -6,12 +6,14 @@
 //! - [`model`]: `measure --model`, a shape fitted after the measurement;
 //! - [`overlay`]: SVG and PNG overlays of curves on the image;
 //! - [`diagnostics`]: `measure --diagnostics DIR`;
-//! - [`cad`]: DXF and SVG exports of the B-spline.
+//! - [`cad`]: DXF and SVG exports of the B-spline;
+//! - [`objects`]: the outputs of `measure --all`.
 
 pub mod cad;
 pub mod diagnostics;
 pub mod measurement;
 pub mod model;
+pub mod objects;
 pub mod overlay;
 
 use serde::Serialize;

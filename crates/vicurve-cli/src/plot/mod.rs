@@ -12,7 +12,10 @@
 //! One layout serves both outputs through the [`Canvas`] trait; the PNG is
 //! drawn at twice the SVG's size with an 8x8 bitmap font (scaled) so that it
 //! needs no font file.
+//!
+//! [`fld`]: the forming-limit scatter of `vicurve grid` (linear axes, SVG).
 
+pub mod fld;
 pub mod maps;
 
 use font8x8::legacy::BASIC_LEGACY;

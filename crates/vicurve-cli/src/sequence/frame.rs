@@ -13,7 +13,8 @@
 //!   the axis, width and its standard deviation, px);
 //! - `STEM.overlay.png` or `.svg` on request.
 
-use super::job::{AxisChoice, CurveSpec, Job, OverlayKind};
+use super::frames::Frame;
+use super::job::{AxisChoice, Job, OverlayKind};
 use super::resume::{rebuild, tracking_state};
 use super::summary::Row;
 use crate::output::measurement::overlay_layers;
@@ -22,38 +23,16 @@ use crate::output::{write_atomic, write_points_csv, ResultFile};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
-use vicurve::curve::{InitialCurve, SplineCurve};
+use vicurve::curve::SplineCurve;
 use vicurve::derived::{width_profile, WidthAxis};
-use vicurve::fit::{
-    measure_from, measure_tracked_cached, FitConfig, Measurement, Outcome, TrackCache,
-    TrackSnapshot, TrackState,
-};
+use vicurve::fit::{Measurement, Outcome, TrackCache, TrackSnapshot, TrackState};
 use vicurve::interp::{Interpolation, Sampler};
+use vicurve::sequence::{measure_curve, CurveStep};
 use vicurve::Image;
 
-/// Spacing of the points that stand for the previous curve in a tracked
-/// frame's `initial_curve` record, px (the fit itself starts from the
-/// previous B-spline: as it is for the tracking schedule, which refits it
-/// itself, smoothed for the job's stages, see [`tracked_start`]).
-const RECORD_SPACING: f64 = 2.0;
-
-/// Control-point spacing of a tracked frame's start, px (at most; at least
-/// 16 control intervals along the curve).
-const START_SPACING: f64 = 10.0;
-
-/// The last good curve of one curve of the job, the frame it is from, and
-/// what the tracking schedule takes from it.
-#[derive(Clone)]
-pub struct Previous {
-    pub curve: SplineCurve,
-    pub stem: String,
-    pub state: Option<TrackState>,
-    /// The band its frame left for the next one, written down (see
-    /// [`vicurve::fit::TrackCache`]).
-    pub band: Option<TrackSnapshot>,
-}
+pub use vicurve::sequence::Previous;
 
 /// The state a sequence carries from frame to frame.
 pub struct Tracking {
@@ -223,19 +202,6 @@ struct FrameRecord<'a> {
     sequence: SequenceInfo<'a>,
 }
 
-/// One curve measured on a frame.
-struct CurveResult {
-    /// The measurement, or why there is none.
-    measured: Result<Measurement, String>,
-    /// The start as recorded, and the configuration used.
-    init: InitialCurve,
-    config: FitConfig,
-    started_from: String,
-    note: String,
-    /// What the curve's cache holds after the fit, written down.
-    band: Option<TrackSnapshot>,
-}
-
 /// What a frame produced.
 pub struct FrameOutput {
     /// Its summary rows (curves, then widths).
@@ -250,18 +216,13 @@ pub struct FrameOutput {
     pub problems: Vec<String>,
 }
 
-/// Decode frame `path` (the error as the one line the summary records).
-pub fn decode_frame(path: &Path) -> Result<Image, String> {
-    vicurve::io::load_image(path).map_err(|e| e.to_string())
-}
-
-/// Measure frame `index` (`path`, decoded by [`decode_frame`] into
+/// Measure frame `index` (`frame`, decoded by [`Frame::decode`] into
 /// `decoded`; results named `files.stem`).
 pub fn measure_frame(
     job: &Job,
     fingerprint: &str,
     index: usize,
-    (path, decoded): (&Path, Result<Image, String>),
+    (frame, decoded): (&Frame, Result<Image, String>),
     files: &FrameFiles,
     tracking: &Tracking,
 ) -> FrameOutput {
@@ -270,7 +231,7 @@ pub fn measure_frame(
         Ok(i) => i,
         Err(e) => return unreadable(job, stem, &e),
     };
-    let path_text = path.display().to_string();
+    let path_text = frame.input();
     // One prepared image per interpolation, prepared when a fit first asks
     // for it: the tracking schedule needs no interpolation (bilinear, which
     // shares the image's pixels), and the cubic prefilter of a whole frame
@@ -287,7 +248,7 @@ pub fn measure_frame(
     };
     // Curves are independent: measure them in parallel (each fit also
     // uses the thread pool for its bands and matrices).
-    let results: Vec<CurveResult> = job
+    let results: Vec<CurveStep> = job
         .curves
         .par_iter()
         .zip(tracking.last_good.par_iter())
@@ -295,7 +256,7 @@ pub fn measure_frame(
         .map(|((spec, prev), cache)| {
             let prev = if job.track { prev.as_ref() } else { None };
             let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
-            measure_curve(spec, prev, &mut cache, &sampler)
+            measure_curve(spec.as_sequence(), prev, &mut cache, &sampler)
         })
         .collect();
 
@@ -454,146 +415,6 @@ fn unreadable(job: &Job, stem: &str, reason: &str) -> FrameOutput {
     }
 }
 
-/// Measure one curve: from the previous frame's result with the tracked
-/// configuration (the tracking schedule first when the spec asks for it
-/// and the previous frame left a state; the tracked configuration's own
-/// schedule when that cannot measure), or from its start with the first; a
-/// tracked fit that fails is tried again from the same curve with the first
-/// frame's configuration when the two differ. The tracking schedule
-/// measures on the band `cache` keeps when it serves, and leaves this
-/// frame's there (the result records it, written down); any other fit
-/// empties the cache.
-fn measure_curve<'s>(
-    spec: &CurveSpec,
-    prev: Option<&Previous>,
-    cache: &mut TrackCache,
-    sampler: &dyn Fn(Interpolation) -> Option<&'s Sampler>,
-) -> CurveResult {
-    let mut result = measure_curve_with(spec, prev, cache, sampler);
-    result.band = cache.snapshot();
-    result
-}
-
-/// [`measure_curve`] but for the band it records.
-fn measure_curve_with<'s>(
-    spec: &CurveSpec,
-    prev: Option<&Previous>,
-    cache: &mut TrackCache,
-    sampler: &dyn Fn(Interpolation) -> Option<&'s Sampler>,
-) -> CurveResult {
-    let run = |reference: SplineCurve, config: &FitConfig| -> Result<Measurement, String> {
-        let s = sampler(config.interpolation)
-            .ok_or_else(|| "no image prepared for this interpolation".to_string())?;
-        measure_from(s, reference, config).map_err(|e| e.to_string())
-    };
-    match prev {
-        None => {
-            cache.clear();
-            let measured = spec
-                .init
-                .to_curve()
-                .map_err(|e| e.to_string())
-                .and_then(|c| run(c, &spec.first));
-            CurveResult {
-                measured,
-                init: spec.init.clone(),
-                config: spec.first.clone(),
-                started_from: "init".into(),
-                note: String::new(),
-                band: None,
-            }
-        }
-        Some(p) => {
-            let init = InitialCurve::Polyline {
-                points: record_points(&p.curve),
-                closed: p.curve.is_closed(),
-            };
-            // The tracking schedule takes the previous curve as it is (it
-            // refits it with control points one element apart itself); the
-            // stages of the job, the smoothed start.
-            let plain = sampler(Interpolation::Bilinear);
-            let short = match (spec.tracking_schedule, &p.state, plain) {
-                (true, Some(state), Some(s)) => {
-                    // Empties the cache when it cannot measure.
-                    measure_tracked_cached(s, p.curve.clone(), state, &spec.tracked, cache)
-                        .ok()
-                        .flatten()
-                }
-                _ => {
-                    cache.clear();
-                    None
-                }
-            };
-            let tracked_result = |measured| CurveResult {
-                measured,
-                init: init.clone(),
-                config: spec.tracked.clone(),
-                started_from: p.stem.clone(),
-                note: String::new(),
-                band: None,
-            };
-            if let Some(m) = short {
-                return tracked_result(Ok(m));
-            }
-            let start = match tracked_start(&p.curve) {
-                Ok(c) => c,
-                Err(e) => return tracked_result(Err(e)),
-            };
-            let first = run(start.clone(), &spec.tracked);
-            let failed = match &first {
-                Err(e) => Some(e.clone()),
-                Ok(m) => match m.outcome {
-                    Outcome::Diverged { divergence } => Some(divergence.to_string()),
-                    _ => None,
-                },
-            };
-            match failed {
-                Some(why) if spec.tracked != spec.first => CurveResult {
-                    measured: run(start, &spec.first),
-                    init,
-                    config: spec.first.clone(),
-                    started_from: p.stem.clone(),
-                    note: format!(
-                        "the tracked fit failed ({why}); measured again with the first frame's stages"
-                    ),
-                    band: None,
-                },
-                _ => tracked_result(first),
-            }
-        }
-    }
-}
-
-/// The start of a tracked frame measured with the job's stages (the
-/// tracking schedule refits its start itself): the previous curve refitted
-/// with control points [`START_SPACING`] apart. The measured curve has
-/// control points 2 px apart and carries the previous frame's noise at
-/// that scale; a fit whose displacement has longer elements (as a schedule
-/// without coarse stages has) cannot remove it, so it would pass on to the
-/// next frame and grow from frame to frame (`examples/track_speed.rs`
-/// tracks a star with the `2:auto` stage alone).
-fn tracked_start(curve: &SplineCurve) -> Result<SplineCurve, String> {
-    let length = curve.param_length();
-    let spacing = (length / 16.0).clamp(2.0, START_SPACING);
-    let n = ((length / 0.5).ceil() as usize).max(8);
-    let pts: Vec<[f64; 2]> = curve
-        .sample_params(n)
-        .into_iter()
-        .map(|u| curve.point(u))
-        .collect();
-    SplineCurve::fit(&pts, curve.is_closed(), 3, spacing).map_err(|e| e.to_string())
-}
-
-/// Points of `curve` about [`RECORD_SPACING`] apart.
-fn record_points(curve: &SplineCurve) -> Vec<[f64; 2]> {
-    let n = (curve.param_length() / RECORD_SPACING).ceil().max(4.0) as usize;
-    curve
-        .sample_params(n)
-        .into_iter()
-        .map(|u| curve.point(u))
-        .collect()
-}
-
 /// The JSON and points CSV of one curve.
 fn write_curve_files(
     job: &Job,
@@ -625,7 +446,7 @@ fn write_overlay(
     kind: OverlayKind,
     files: &FrameFiles,
     image: &Image,
-    results: &[CurveResult],
+    results: &[CurveStep],
 ) -> Result<(), String> {
     let mut layers = Vec::new();
     for r in results {

@@ -48,13 +48,13 @@
 //! explicit stages, which end without the pixel-edge stage and are less
 //! accurate (docs/benchmarks.md, "Sequences").
 
+use super::frames::{frames, Frame};
 use crate::args::CurveArgs;
 use crate::failure::{one_line, Failure};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{parse_stages, FitConfig};
-use vicurve::virtual_image::Kind;
+use vicurve::fit::FitConfig;
 
 /// `DIR/summary.csv`.
 pub const SUMMARY_STEM: &str = "summary";
@@ -167,8 +167,8 @@ impl Default for OutputsFile {
 /// from its flags.
 #[derive(Debug, Clone)]
 pub struct Job {
-    /// The frames, in order.
-    pub images: Vec<PathBuf>,
+    /// The frames, in order (the pages of a stack one by one).
+    pub images: Vec<Frame>,
     pub out_dir: PathBuf,
     /// Start each frame from the previous frame's result (else every frame
     /// from the curves' `init`).
@@ -176,6 +176,64 @@ pub struct Job {
     pub curves: Vec<CurveSpec>,
     pub widths: Vec<WidthSpec>,
     pub outputs: JobOutputs,
+    /// The part of a larger job these frames are (`run --shard K/N`).
+    pub shard: Option<Shard>,
+}
+
+/// Part `index` (from 1) of `count` of a job whose frames start at
+/// `first` of the whole job's (`run --shard K/N`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+    pub first: usize,
+}
+
+impl Shard {
+    /// `summary.shard-K-of-N.csv`, the part's summary (`merge` joins them).
+    pub fn summary_name(&self) -> String {
+        format!("{SUMMARY_STEM}.shard-{}-of-{}.csv", self.index, self.count)
+    }
+}
+
+/// `K/N` with `1 <= K <= N`.
+pub fn parse_shard(text: &str) -> Result<(usize, usize), Failure> {
+    let bad = || {
+        Failure::Error(format!(
+            "--shard '{text}': expected K/N with 1 <= K <= N, such as 3/10"
+        ))
+    };
+    let (k, n) = text.split_once('/').ok_or_else(bad)?;
+    let (k, n): (usize, usize) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if k == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// Keep part `k` of `n` of the job's frames: the frames split evenly in
+/// order (part `k` has frames `(k-1) T / N` to `k T / N`). A tracked job
+/// is one sequence, each frame started from the one before: it cannot be
+/// split without changing its results, so it is one part (split a
+/// campaign of sequences by giving each its own job file).
+pub fn shard(job: &mut Job, k: usize, n: usize) -> Result<(), Failure> {
+    if job.track && n > 1 {
+        return Err(Failure::Error(
+            "--shard: a tracked job is one sequence (each frame starts from the one before) and cannot be split; give each sequence its own job file, or set track = false for independent frames".into(),
+        ));
+    }
+    let total = job.images.len();
+    let (first, end) = ((k - 1) * total / n, k * total / n);
+    job.images = job.images[first..end].to_vec();
+    job.shard = Some(Shard {
+        index: k,
+        count: n,
+        first,
+    });
+    Ok(())
 }
 
 /// One curve to measure on every frame.
@@ -192,6 +250,18 @@ pub struct CurveSpec {
     /// Whether those frames run the tracking schedule first (see the
     /// [module docs](self)), `tracked` being the fallback.
     pub tracking_schedule: bool,
+}
+
+impl CurveSpec {
+    /// The curve as the library's sequence step takes it.
+    pub fn as_sequence(&self) -> vicurve::sequence::SequenceCurve<'_> {
+        vicurve::sequence::SequenceCurve {
+            init: &self.init,
+            first: &self.first,
+            tracked: &self.tracked,
+            tracking_schedule: self.tracking_schedule,
+        }
+    }
 }
 
 /// How the axis of a width profile is chosen.
@@ -249,6 +319,7 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
         Images::Glob(pattern) => expand_glob(&resolve(&base, pattern))?,
         Images::List(list) => list.iter().map(|p| base.join(p)).collect(),
     };
+    let images = frames(images)?;
     let curves = file
         .curve
         .iter()
@@ -282,6 +353,7 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
             overlay,
             plots: file.outputs.plots,
         },
+        shard: None,
     };
     check(&job)?;
     Ok(job)
@@ -340,18 +412,9 @@ pub fn curve_spec(
     let context = |e: Failure| Failure::Error(format!("curve '{name}': {}", e.message()));
     let init = args.init(init).map_err(context)?;
     let first = args.config().map_err(context)?;
-    let mut tracked = first.clone();
-    tracked.stages = match track_stages {
-        Some("default") => None,
-        Some(s) => Some(parse_stages(s).map_err(|e| context(e.into()))?),
-        None => first.stages.clone(),
-    };
-    let tracking_schedule = track_stages.is_none()
-        && first.stages.is_none()
-        && first.kind == Kind::Silhouette
-        && first.blur_correction;
     first.validate().map_err(|e| context(e.into()))?;
-    tracked.validate().map_err(|e| context(e.into()))?;
+    let (tracked, tracking_schedule) =
+        vicurve::sequence::tracked_config(&first, track_stages).map_err(|e| context(e.into()))?;
     Ok(CurveSpec {
         name,
         init,
@@ -460,30 +523,21 @@ pub fn check(job: &Job) -> Result<(), Failure> {
         }
         names.push(n);
     }
-    let mut stems: Vec<String> = Vec::new();
-    for p in &job.images {
-        let stem = frame_stem(p)?;
+    let mut seen = std::collections::HashSet::new();
+    for f in &job.images {
+        let stem = &f.stem;
         if stem == SUMMARY_STEM || stem == MANIFEST_STEM {
             return Err(Failure::Error(format!(
                 "frame {}: the name '{stem}' is reserved for the job's own files; rename the image",
-                p.display()
+                f.input()
             )));
         }
-        if stems.contains(&stem) {
+        if !seen.insert(stem.as_str()) {
             return Err(Failure::Error(format!(
                 "two frames are named '{stem}' (results are named after the file stem): {}",
-                p.display()
+                f.input()
             )));
         }
-        stems.push(stem);
     }
     Ok(())
-}
-
-/// A frame's file stem, which names its results.
-pub fn frame_stem(p: &Path) -> Result<String, Failure> {
-    p.file_stem()
-        .and_then(|s| s.to_str())
-        .map(str::to_string)
-        .ok_or_else(|| Failure::Error(format!("frame {}: no usable file name", p.display())))
 }

@@ -24,7 +24,9 @@
 //! - `progress`: the progress bar; `plots`: the width plots.
 
 pub mod frame;
+pub mod frames;
 pub mod job;
+pub mod merge;
 mod plots;
 mod progress;
 mod resume;
@@ -32,11 +34,11 @@ mod summary;
 
 use crate::failure::Failure;
 use crate::output::write_atomic;
-use frame::{decode_frame, measure_frame, FrameFiles, Tracking};
-use job::{frame_stem, Job, MANIFEST_STEM, SUMMARY_STEM};
+use frame::{measure_frame, FrameFiles, Tracking};
+use frames::Frame;
+use job::{Job, MANIFEST_STEM, SUMMARY_STEM};
 use resume::{read_fingerprint, read_recorded, remove_stale_temporaries, Manifest};
 use std::collections::HashMap;
-use std::path::Path;
 use std::time::{Duration, Instant};
 use summary::{read_summary, status, write_summary};
 use vicurve::curve::SplineCurve;
@@ -78,18 +80,18 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         (serde_json::to_string_pretty(&manifest_text).unwrap_or_default() + "\n").as_bytes(),
     )?;
 
-    let summary_path = dir.join(format!("{SUMMARY_STEM}.csv"));
+    let summary_path = dir.join(match &job.shard {
+        None => format!("{SUMMARY_STEM}.csv"),
+        Some(s) => s.summary_name(),
+    });
+    let offset = job.shard.map_or(0, |s| s.first);
     let mut old_rows = if force {
         HashMap::new()
     } else {
         read_summary(&summary_path)
     };
     let rows_per_frame = job.curves.len() + job.widths.len();
-    let stems: Vec<String> = job
-        .images
-        .iter()
-        .map(|p| frame_stem(p))
-        .collect::<Result<_, _>>()?;
+    let stems: Vec<String> = job.images.iter().map(|f| f.stem.clone()).collect();
     // Done: rows in the summary and every curve's JSON present (checked
     // further when read back).
     let done: Vec<bool> = stems
@@ -120,10 +122,10 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
     let total = stems.len();
     // The next frame, decoded ahead (its index and what decoding gave).
     let mut prefetched: Option<(usize, Result<vicurve::Image, String>)> = None;
-    for (i, (path, stem)) in job.images.iter().zip(&stems).enumerate() {
+    for (i, (frame, stem)) in job.images.iter().zip(&stems).enumerate() {
         let files = FrameFiles::new(job, stem);
         if done[i] {
-            if let Some((good, states, bands)) = read_done(job, &fingerprint, path, &files) {
+            if let Some((good, states, bands)) = read_done(job, &fingerprint, frame, &files) {
                 tracking.update(job, stem, &good, &states, &bands, false);
                 lines[i] = old_rows.remove(stem).unwrap_or_default();
                 skipped += 1;
@@ -135,14 +137,23 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
         let started = Instant::now();
         let decoded = match prefetched.take() {
             Some((k, d)) if k == i => d,
-            _ => decode_frame(path),
+            _ => frame.decode(),
         };
         // The next frame to measure is decoded while this one is measured
         // (a frame's fit leaves a core idle part of the time).
         let next = (i + 1..total).find(|&k| !done[k]);
         let (out, next_decoded) = rayon::join(
-            || measure_frame(job, &fingerprint, i, (path, decoded), &files, &tracking),
-            || next.map(|k| (k, decode_frame(&job.images[k]))),
+            || {
+                measure_frame(
+                    job,
+                    &fingerprint,
+                    offset + i,
+                    (frame, decoded),
+                    &files,
+                    &tracking,
+                )
+            },
+            || next.map(|k| (k, job.images[k].decode())),
         );
         prefetched = next_decoded;
         tracking.update(job, stem, &out.good, &out.states, &out.bands, true);
@@ -177,7 +188,7 @@ pub fn run(job: &Job, force: bool) -> Result<(), Failure> {
             "vicurve: {skipped} frame(s) already done, skipped (--force measures them again); {measured} measured"
         );
     }
-    if job.outputs.plots {
+    if job.outputs.plots && job.shard.is_none() {
         if let Err(e) = plots::write_plots(job, &stems, &lines) {
             eprintln!("vicurve: warning: {e}");
         }
@@ -194,8 +205,13 @@ type DoneCurves = (
 );
 
 /// A done frame's curves as written, `None` if any JSON is unusable.
-fn read_done(job: &Job, fingerprint: &str, path: &Path, files: &FrameFiles) -> Option<DoneCurves> {
-    let input = path.display().to_string();
+fn read_done(
+    job: &Job,
+    fingerprint: &str,
+    frame: &Frame,
+    files: &FrameFiles,
+) -> Option<DoneCurves> {
+    let input = frame.input();
     let recorded: Vec<_> = job
         .curves
         .iter()

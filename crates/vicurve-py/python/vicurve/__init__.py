@@ -25,6 +25,8 @@ basis_values(degree, n_elements, length, closed, s) -> ndarray
     The engine's uniform B-spline basis, for checks and plots.
 interpolate(image, xs, ys, kind="cubic") -> ndarray
     The engine's image interpolation (cubic B-spline, bilinear, Keys).
+track(frames, init, ...) -> Tracker
+    Track a curve through a sequence; iterate for one TrackedFrame per frame.
 
 Images are 2-D NumPy arrays (``uint8`` divided by 255, ``uint16`` by 65535,
 ``float32``/``float64`` taken as they are, exactly as image files are read)
@@ -35,10 +37,9 @@ parameters, images or curves, ``FitError`` (a ``RuntimeError``) for a fit
 that diverged, with the partial result in its ``result`` attribute; a fit
 that reached its iteration limit returns with a ``RuntimeWarning``.
 
-Not available: tracking a curve through a sequence of images. The engine has
-no tracking yet, so there is no ``vicurve.track``; to follow a curve, measure
-each image starting from the previous result (``Polyline(result.points,
-closed=...)``).
+Sequences: ``track(frames, init, ...)`` follows a curve through a 3-D array,
+a list of arrays or paths, a glob or a multi-page TIFF, each frame started from
+the previous result as ``vicurve track`` does, yielding one frame at a time.
 
 Example::
 
@@ -62,7 +63,9 @@ from ._vicurve import (
     interpolate,
     measure,
     synth,
+    track,
 )
+from ._vicurve import measure_all as _measure_all
 
 __all__ = [
     "Auto",
@@ -76,5 +79,30 @@ __all__ = [
     "eval",
     "interpolate",
     "measure",
+    "measure_all",
     "synth",
+    "track",
 ]
+
+
+def measure_all(image, **kwargs):
+    """Measure every object of ``image``; returns ``(results, table)``.
+
+    ``results`` has one ``Result`` per object (None when it could not be
+    measured at all), numbered row-major by centroid; ``table`` one row per
+    object: a pandas DataFrame when pandas is installed, else a dict of
+    NumPy arrays. Keywords: ``polarity``, ``model``, ``min_length``,
+    ``min_area``, ``roi``, ``include_border`` (see ``_vicurve.measure_all``).
+    """
+    import numpy as np
+
+    results, columns = _measure_all(image, **kwargs)
+    table = {
+        k: (np.array(v, dtype=str) if k in ("outcome", "message") else v)
+        for k, v in columns.items()
+    }
+    try:
+        import pandas as pd
+    except ImportError:
+        return results, table
+    return results, pd.DataFrame(table)

@@ -20,6 +20,9 @@ __all__ = [
     "eval",
     "basis_values",
     "interpolate",
+    "track",
+    "Tracker",
+    "TrackedFrame",
 ]
 
 _ImageLike = Union[npt.NDArray[Any], str, "os.PathLike[str]"]
@@ -188,6 +191,20 @@ def measure(
     arguments, ``FileNotFoundError`` for a missing file.
     """
 
+def measure_all(
+    image: _ImageLike,
+    *,
+    polarity: str = "auto",
+    model: Optional[str] = None,
+    min_length: Optional[float] = None,
+    min_area: Optional[float] = None,
+    roi: Optional[Tuple[float, float, float, float]] = None,
+    include_border: bool = False,
+) -> Tuple[List[Optional[Result]], Dict[str, Any]]:
+    """Every object of ``image``: one ``Result`` (or None) per object and
+    the table as a dict of NumPy arrays (``vicurve.measure_all`` makes it a
+    DataFrame when pandas is installed)."""
+
 def synth(
     shape: _ShapeName,
     *,
@@ -246,3 +263,48 @@ def interpolate(
     *,
     gradient: Literal[True],
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+
+@final
+class TrackedFrame:
+    """One frame of ``track``: index, name, input, ok, outcome, reason,
+    started_from and result (None when nothing was measured)."""
+
+    index: int
+    name: str
+    input: str
+    ok: bool
+    outcome: Literal["converged", "iteration_limit", "diverged", "failed"]
+    reason: Optional[str]
+    started_from: str
+    result: Optional[Result]
+
+@final
+class Tracker:
+    """Iterator of ``TrackedFrame``, one frame read and measured at a time."""
+
+    def __iter__(self) -> "Tracker": ...
+    def __next__(self) -> TrackedFrame: ...
+    def __len__(self) -> int: ...
+    def summary(self, pandas: bool = True) -> Any:
+        """The frames so far: a pandas DataFrame, or a dict of NumPy arrays."""
+
+def track(
+    frames: Union[npt.NDArray[Any], Sequence[_ImageLike], str, "os.PathLike[str]"],
+    init: _InitialCurve,
+    *,
+    kind: _Kind = "silhouette",
+    stages: Optional[_Stages] = None,
+    track_stages: Optional[str] = None,
+    tracking: bool = True,
+    degree: int = 3,
+    polarity: _PolarityName = "auto",
+    interpolation: _InterpolationName = "cubic",
+    tolerance: float = 1e-4,
+    max_iterations: int = 200,
+    blur_correction: bool = True,
+    levels: str = "varying",
+    progress: bool = True,
+) -> Tracker:
+    """Track a curve through ``frames`` (3-D array, arrays or paths, a glob,
+    a multi-page TIFF), each frame started from the previous result as
+    ``vicurve track`` does."""

@@ -18,6 +18,7 @@ pub mod coverage;
 pub mod noise;
 pub mod presets;
 pub mod profile;
+pub mod scene;
 pub mod shapes;
 pub mod specimen;
 mod truth_file;

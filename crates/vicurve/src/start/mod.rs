@@ -58,12 +58,12 @@ const MIN_REGION_PIXELS: usize = 50;
 /// An open start keeps this far (pixels) from the search rectangle's
 /// border: enough to leave out the boundary pixels that run along the
 /// border itself (and the smoothing's few pixels at the ends).
-const OPEN_END_MARGIN: f64 = 3.0;
+pub(crate) const OPEN_END_MARGIN: f64 = 3.0;
 /// Boundary pixels averaged on each side of a point (the staircase of a
 /// traced boundary is smoothed to about a tenth of a pixel).
 const SMOOTH_HALF_WINDOW: usize = 3;
 /// A boundary needs at least this many pixels to make a curve.
-const MIN_BOUNDARY: usize = 12;
+pub(crate) const MIN_BOUNDARY: usize = 12;
 
 /// Where to look for the silhouette.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -164,7 +164,7 @@ pub fn find_silhouette(image: &Image, config: &StartConfig) -> Result<AutoStart>
 }
 
 /// The search rectangle of `roi` clipped to the image.
-fn search_rect(image: &Image, roi: Option<[f64; 4]>) -> Result<Rect> {
+pub(crate) fn search_rect(image: &Image, roi: Option<[f64; 4]>) -> Result<Rect> {
     let (w, h) = (image.width(), image.height());
     let Some([x0, y0, x1, y1]) = roi else {
         return Ok(Rect {
@@ -237,7 +237,7 @@ fn main_region<'a>(
 /// per pixel, central differences) on its pixels, i.e. about the contrast
 /// integrated along the edge. Both factors matter: a faint texture blob can
 /// be large, a speck can be sharp; a real object's edge is long and sharp.
-fn edge_score(run: &[(usize, usize)], values: &[f64], w: usize, h: usize) -> f64 {
+pub(crate) fn edge_score(run: &[(usize, usize)], values: &[f64], w: usize, h: usize) -> f64 {
     let at = |i: usize, j: usize| values[j * w + i];
     let gradient = |&(i, j): &(usize, usize)| {
         let (il, ir) = (i.saturating_sub(1), (i + 1).min(w - 1));
@@ -251,7 +251,7 @@ fn edge_score(run: &[(usize, usize)], values: &[f64], w: usize, h: usize) -> f64
 
 /// The longest cyclic stretch of `chain` whose pixels are all at least
 /// `OPEN_END_MARGIN` px from the border of `rect` (positions within it).
-fn free_run(chain: &[(usize, usize)], rect: Rect) -> Vec<(usize, usize)> {
+pub(crate) fn free_run(chain: &[(usize, usize)], rect: Rect) -> Vec<(usize, usize)> {
     let (w, h) = (rect.width() as f64, rect.height() as f64);
     let free = |&(i, j): &(usize, usize)| {
         let (x, y) = (i as f64, j as f64);
@@ -283,7 +283,7 @@ fn free_run(chain: &[(usize, usize)], rect: Rect) -> Vec<(usize, usize)> {
 
 /// Moving average over `2 SMOOTH_HALF_WINDOW + 1` points (cyclic when
 /// `closed`, shrinking at the ends of an open chain so that they stay put).
-fn smooth(points: &[[f64; 2]], closed: bool) -> Vec<[f64; 2]> {
+pub(crate) fn smooth(points: &[[f64; 2]], closed: bool) -> Vec<[f64; 2]> {
     let n = points.len();
     (0..n)
         .map(|k| {

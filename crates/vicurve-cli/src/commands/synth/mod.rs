@@ -1,6 +1,7 @@
 //! `vicurve synth`: test images with exactly known geometry.
 
 mod necking;
+mod scene;
 
 pub use crate::args::synth::Args;
 use crate::args::synth::{check_bits, numbers, parse_size, ShapeName, DEFAULT_LEVELS};
@@ -13,6 +14,9 @@ use vicurve::virtual_image::Kind;
 pub fn run(args: Args) -> Result<(), Failure> {
     if args.shape == ShapeName::Necking {
         return necking::necking(&args);
+    }
+    if matches!(args.shape, ShapeName::Scene | ShapeName::Grid) {
+        return scene::scene(&args);
     }
     let spec = spec_from_args(&args)?;
     let image = render(&spec)?;
@@ -105,6 +109,11 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         ShapeName::Necking => {
             return Err(Failure::Error(
                 "necking is a sequence: see synth necking".into(),
+            ));
+        }
+        ShapeName::Scene | ShapeName::Grid => {
+            return Err(Failure::Error(
+                "scene and grid hold many shapes: see synth scene, synth grid".into(),
             ));
         }
     };

@@ -1,0 +1,95 @@
+//! `vicurve measure IMAGE --all`: every object of the image.
+
+use super::measure::Args;
+use crate::args::all::object_polarity;
+use crate::failure::Failure;
+use crate::output::objects;
+use vicurve::objects::{measure_all, AllConfig, AllResult};
+
+/// The configuration of `--all` from `measure`'s flags: `--polarity` is the
+/// objects' phase; the fit's polarity is set per object.
+pub fn config(args: &Args) -> Result<AllConfig, Failure> {
+    if args.start.init.is_some() || args.start.pick.is_some() || args.start.grow.is_some() {
+        return Err(Failure::Error(
+            "--all finds every object itself: drop --init, --pick and --grow".into(),
+        ));
+    }
+    let mut curve = args.curve.clone();
+    let polarity = object_polarity(&curve.polarity)?;
+    curve.polarity = "auto".into();
+    let mut fit = curve.config()?;
+    args.band.apply(&mut fit)?;
+    Ok(AllConfig {
+        polarity,
+        min_length: args.all.min_length,
+        min_area: args.all.min_area,
+        roi: args.start.automatic()?.roi,
+        include_border: args.all.include_border,
+        model: args.model,
+        fit,
+        ..AllConfig::default()
+    })
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let config = config(&args)?;
+    config.validate()?;
+    if args.diagnostics.is_some()
+        || args.cad.any()
+        || args.outputs.svg.is_some()
+        || args.outputs.png.is_some()
+    {
+        return Err(Failure::Error(
+            "--all writes --out, --points and --table; --svg, --png, --diagnostics and the CAD files are for one curve".into(),
+        ));
+    }
+    let image = vicurve::io::load_image(&args.image)?;
+    let all = measure_all(&image, &config)?;
+    let input = args.image.display().to_string();
+    objects::write(
+        &all,
+        &config,
+        &input,
+        (image.width(), image.height()),
+        args.outputs.out.as_deref(),
+        args.outputs.points.as_deref(),
+        args.all.table.as_deref(),
+    )?;
+    summary(&all);
+    finish(&all)
+}
+
+/// One line on what was found, one per failed object.
+pub fn summary(all: &AllResult) {
+    let f = &all.found;
+    eprintln!(
+        "vicurve: {} {} object(s) found (threshold {:.4}, noise {:.4}); left out: {} small, {} faint, {} cut by the border",
+        all.objects.len(),
+        if f.bright { "bright" } else { "dark" },
+        f.threshold,
+        f.noise,
+        f.small,
+        f.faint,
+        f.border
+    );
+    for o in all.objects.iter() {
+        if let Some(e) = &o.failure {
+            let c = o.region.centroid;
+            eprintln!(
+                "vicurve: object {} at ({:.1}, {:.1}) failed: {e}",
+                o.id, c[0], c[1]
+            );
+        }
+    }
+}
+
+/// Exit 3 when some object failed (the others are written).
+pub fn finish(all: &AllResult) -> Result<(), Failure> {
+    match all.failed() {
+        0 => Ok(()),
+        n => Err(Failure::Diverged(format!(
+            "{n} of {} objects failed (the others are measured and written; the table's outcome says why each failed)",
+            all.objects.len()
+        ))),
+    }
+}

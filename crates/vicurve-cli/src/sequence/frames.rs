@@ -1,0 +1,99 @@
+//! The frames of a sequence: image files, and the pages of multi-page
+//! TIFF stacks.
+//!
+//! A `.tif`/`.tiff` file of more than one page stands for its pages, in
+//! order; page `K` of `stack.tif` is the frame `stack_KKKK` (the index from
+//! 0, zero-padded to at least 4 digits, so that the names sort in order)
+//! and is recorded in result files as `stack.tif#K`. Pages are decoded one
+//! at a time from the open file when the frame is measured. A stack whose
+//! chain of pages breaks early (a truncated file) has one more frame after
+//! its last readable page, which fails with the reason.
+
+use crate::failure::Failure;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use vicurve::io::TiffStack;
+use vicurve::Image;
+
+/// One frame: an image file or one page of a stack.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// The file.
+    pub path: PathBuf,
+    /// Names the frame's results (the file stem, or `STEM_KKKK` for a page).
+    pub stem: String,
+    /// The page, and the stack it is read from.
+    pub page: Option<(usize, Arc<TiffStack>)>,
+}
+
+impl Frame {
+    /// The frame as result files record it: the path, `PATH#K` for page
+    /// `K` of a stack.
+    pub fn input(&self) -> String {
+        match &self.page {
+            None => self.path.display().to_string(),
+            Some((k, _)) => format!("{}#{k}", self.path.display()),
+        }
+    }
+
+    /// Decode the frame (the error as the one line the summary records).
+    pub fn decode(&self) -> Result<Image, String> {
+        match &self.page {
+            None => vicurve::io::load_image(&self.path),
+            Some((k, stack)) => stack.read_page(*k),
+        }
+        .map_err(|e| e.to_string())
+    }
+}
+
+/// The frames of `paths`, in order: each multi-page TIFF (by its name's
+/// extension) expanded into its pages. A TIFF that cannot be opened stays
+/// one frame (its decoding fails when it is measured, and is recorded).
+pub fn frames(paths: Vec<PathBuf>) -> Result<Vec<Frame>, Failure> {
+    let mut out = Vec::with_capacity(paths.len());
+    for path in paths {
+        let stem = file_stem(&path)?;
+        let stack = is_tiff_name(&path)
+            .then(|| TiffStack::open(&path).ok())
+            .flatten()
+            .filter(|s| pages(s) > 1);
+        let Some(stack) = stack else {
+            out.push(Frame {
+                path,
+                stem,
+                page: None,
+            });
+            continue;
+        };
+        let n = pages(&stack);
+        let digits = (n - 1).to_string().len().max(4);
+        let stack = Arc::new(stack);
+        for k in 0..n {
+            out.push(Frame {
+                path: path.clone(),
+                stem: format!("{stem}_{k:0digits$}"),
+                page: Some((k, Arc::clone(&stack))),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The frames of a stack: its pages, and the missing one of a broken chain.
+fn pages(stack: &TiffStack) -> usize {
+    stack.len() + usize::from(stack.broken().is_some())
+}
+
+fn is_tiff_name(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
+}
+
+/// A file's stem, which names its results.
+fn file_stem(p: &Path) -> Result<String, Failure> {
+    p.file_stem()
+        .and_then(|s| s.to_str())
+        .map(str::to_string)
+        .ok_or_else(|| Failure::Error(format!("frame {}: no usable file name", p.display())))
+}

@@ -1,0 +1,176 @@
+//! `measure --all`, `synth scene|grid` and `grid`, end to end.
+
+use crate::common::{assert_error, ok, p, text, vicurve};
+
+fn json(path: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The rows of a CSV file as cells, header first.
+fn csv(path: &str) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect()
+}
+
+/// A scene of 50 objects, 20 specks and 5 border discs: every whole
+/// object in the table, measured, near its true centre; the result file
+/// holds each; the points carry an `object` column.
+#[test]
+fn measure_all_on_a_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = (p(d, "scene.png"), p(d, "scene.json"));
+    ok(&vicurve(&[
+        "synth", "scene", "--out", &img, "--truth", &truth,
+    ]));
+    let (table, out, points) = (p(d, "objects.csv"), p(d, "all.json"), p(d, "pts.csv"));
+    let run = vicurve(&[
+        "measure", &img, "--all", "--model", "ellipse", "--table", &table, "--out", &out,
+        "--points", &points,
+    ]);
+    ok(&run);
+    let t = json(&truth);
+    let whole: Vec<[f64; 2]> = t["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|i| i["role"] == "object")
+        .map(|i| {
+            [
+                i["shape"]["cx"].as_f64().unwrap(),
+                i["shape"]["cy"].as_f64().unwrap(),
+            ]
+        })
+        .collect();
+    assert_eq!(whole.len(), 50);
+    let rows = csv(&table);
+    let col = |n: &str| rows[0].iter().position(|c| c == n).unwrap();
+    let (cx, cy, outcome) = (col("model_cx"), col("model_cy"), col("outcome"));
+    assert_eq!(rows.len() - 1, whole.len(), "{}", text(&run.stderr));
+    for c in &whole {
+        let row = rows[1..]
+            .iter()
+            .find(|r| {
+                let x: f64 = r[cx].parse().unwrap_or(f64::NAN);
+                let y: f64 = r[cy].parse().unwrap_or(f64::NAN);
+                (x - c[0]).hypot(y - c[1]) < 0.02
+            })
+            .unwrap_or_else(|| panic!("object at {c:?} not measured within 0.02 px"));
+        assert_eq!(row[outcome], "measured");
+    }
+    let record = json(&out);
+    assert_eq!(record["objects"].as_array().unwrap().len(), 50);
+    assert_eq!(record["failed"], 0);
+    assert!(record["coordinates"]
+        .as_str()
+        .unwrap()
+        .contains("x = column"));
+    let pts = csv(&points);
+    assert_eq!(pts[0][0], "object");
+    assert!(pts[1..].iter().any(|r| r[0] == "49"));
+}
+
+/// Two discs touching among isolated ones: the pair fails with its reason,
+/// the others are measured, the exit code is 3.
+#[test]
+fn a_touching_pair_fails_and_the_exit_code_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = vicurve::render::scene::random_scene(400, 300, 4, 0, 0, true, 10.0, 2).unwrap();
+    let image = vicurve::render::scene::render_scene(&scene).unwrap();
+    let img = p(d, "pair.png");
+    vicurve::io::save_image(img.as_ref(), &image, 8).unwrap();
+    let table = p(d, "objects.csv");
+    let run = vicurve(&[
+        "measure", &img, "--all", "--model", "ellipse", "--table", &table,
+    ]);
+    // A line per failed object, then the error line.
+    assert_eq!(run.status.code(), Some(3), "{}", text(&run.stderr));
+    let stderr = text(&run.stderr);
+    let last = stderr.lines().last().unwrap();
+    assert!(
+        last.starts_with("vicurve: error:") && last.contains("objects failed"),
+        "{last}"
+    );
+    let rows = csv(&table);
+    let outcome = rows[0].iter().position(|c| c == "outcome").unwrap();
+    let failed: Vec<_> = rows[1..]
+        .iter()
+        .filter(|r| r[outcome] != "measured")
+        .collect();
+    let measured = rows.len() - 1 - failed.len();
+    assert_eq!(measured, 4, "{}", text(&run.stderr));
+    assert!((1..=2).contains(&failed.len()));
+    for r in failed {
+        assert!(
+            r[outcome] == "model_misfit" || r[outcome] == "too_close",
+            "{r:?}"
+        );
+    }
+}
+
+/// `synth grid` then `grid`: one row per circle, strains near the truth.
+#[test]
+fn grid_strains_from_a_synthetic_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = (p(d, "grid.png"), p(d, "grid.json"));
+    ok(&vicurve(&[
+        "synth", "grid", "--out", &img, "--truth", &truth,
+    ]));
+    let table = p(d, "strains.csv");
+    let fld = p(d, "fld.svg");
+    ok(&vicurve(&[
+        "grid",
+        &img,
+        "--diameter",
+        "30",
+        "--table",
+        &table,
+        "--fld",
+        &fld,
+    ]));
+    let svg = std::fs::read_to_string(&fld).unwrap();
+    assert_eq!(svg.matches(r#"class="circle""#).count(), 100);
+    let rows = csv(&table);
+    assert_eq!(rows.len() - 1, 100);
+    let col = |n: &str| rows[0].iter().position(|c| c == n).unwrap();
+    let t = json(&truth);
+    let items = t["items"].as_array().unwrap();
+    for (r, item) in rows[1..].iter().zip(items) {
+        let s = item["strain"].as_array().unwrap();
+        for (name, k) in [("eps1", 0), ("eps2", 1)] {
+            let v: f64 = r[col(name)].parse().unwrap();
+            let sigma: f64 = r[col(&format!("sigma_{name}"))].parse().unwrap();
+            let e = (v - s[k].as_f64().unwrap()).abs();
+            assert!(e < 5.0 * sigma && e < 1e-3, "{name} {e} sigma {sigma}");
+        }
+    }
+    // The scale: D0 in mm, centres in mm.
+    let mm = p(d, "strains_mm.csv");
+    ok(&vicurve(&[
+        "grid",
+        &img,
+        "--diameter",
+        "3",
+        "--scale",
+        "0.1",
+        "--roi",
+        "0,0,200,200",
+        "--table",
+        &mm,
+    ]));
+    assert!(csv(&mm)[0].contains(&"x_mm".to_string()));
+}
+
+/// Options of --all without it, and --all with --init, are refused.
+#[test]
+fn all_options_are_checked() {
+    let out = vicurve(&["measure", "x.png", "--table", "t.csv"]);
+    assert_error(&out, 1, "go with --all");
+    let out = vicurve(&["measure", "x.png", "--all", "--init", "circle:1,2,3"]);
+    assert_error(&out, 1, "drop --init");
+}

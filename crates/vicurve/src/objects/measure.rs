@@ -1,0 +1,206 @@
+//! Measuring one object from its own traced start, its bands kept off its
+//! neighbours, every way it can fail recorded.
+
+use super::find::{Candidate, GAP_REACH};
+use super::{AllConfig, ObjectFailure, ObjectResult};
+use crate::curve::InitialCurve;
+use crate::derived::closed_measures;
+use crate::fit::{
+    default_stages, measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage,
+};
+use crate::image::Image;
+use crate::model::measure_model;
+use crate::start::{free_run, smooth, MIN_BOUNDARY};
+
+/// Least gap (px) to another region for an object to be measured: the
+/// model fit's first band at a blur of 1 px (4.75 px) and a pixel.
+pub const MIN_GAP: f64 = 6.0;
+/// A band's half-width stays this far (px) inside the gap: the neighbour's
+/// edge reaches about three blur deviations into it.
+const BAND_MARGIN: f64 = 3.0;
+/// A model whose residual exceeds the free curve's (or 1 % of the
+/// contrast, whichever is larger) this many times does not fit.
+const MISFIT_RATIO: f64 = 2.0;
+
+/// Measure `c` (module docs of [`super`]); never fails: a failure is
+/// recorded in the result.
+pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> ObjectResult {
+    let mut out = ObjectResult {
+        id: c.id,
+        region: c.region.clone(),
+        start: None,
+        config: config.fit.clone(),
+        measurement: None,
+        closed: None,
+        model: None,
+        failure: None,
+    };
+    let start = match start_curve(c) {
+        Ok(s) => s,
+        Err(message) => {
+            out.failure = Some(ObjectFailure::Start { message });
+            return out;
+        }
+    };
+    out.start = Some(start.clone());
+    let fit = match capped_config(c, &config.fit, start.is_closed()) {
+        Ok(f) => f,
+        Err(f) => {
+            out.failure = Some(f);
+            return out;
+        }
+    };
+    out.config = fit.clone();
+    let m = match measure(image, &start, &fit) {
+        Ok(m) => m,
+        Err(e) => {
+            out.failure = Some(ObjectFailure::Measure {
+                message: e.to_string(),
+            });
+            return out;
+        }
+    };
+    out.failure = check_curve(c, &m);
+    if m.curve.is_closed() {
+        out.closed = closed_measures(&m).ok();
+    }
+    if let (None, Some(model)) = (&out.failure, config.model) {
+        match measure_model(image, &m, &fit, model, &config.model_config) {
+            Ok(f) => {
+                out.failure = check_model(&f, &m);
+                out.model = Some(f);
+            }
+            Err(e) => {
+                out.failure = Some(ObjectFailure::Model {
+                    message: e.to_string(),
+                })
+            }
+        }
+    }
+    out.measurement = Some(m);
+    out
+}
+
+/// The smoothed traced boundary: closed for an object seen whole, its
+/// longest stretch away from the border for one cut by it.
+fn start_curve(c: &Candidate) -> Result<InitialCurve, String> {
+    if !c.region.touches_border {
+        return Ok(InitialCurve::Polyline {
+            points: smooth(&c.chain, true),
+            closed: true,
+        });
+    }
+    let (x0, y0) = (c.rect.x0 as f64, c.rect.y0 as f64);
+    let local: Vec<(usize, usize)> = c
+        .chain
+        .iter()
+        .map(|p| ((p[0] - x0) as usize, (p[1] - y0) as usize))
+        .collect();
+    let run = free_run(&local, c.rect);
+    if run.len() < MIN_BOUNDARY {
+        return Err("the visible edge stays near the border".into());
+    }
+    let points: Vec<[f64; 2]> = run
+        .iter()
+        .map(|&(i, j)| [x0 + i as f64, y0 + j as f64])
+        .collect();
+    Ok(InitialCurve::Polyline {
+        points: smooth(&points, false),
+        closed: false,
+    })
+}
+
+/// The fit's configuration for `c`: its polarity set from the region (a
+/// closed curve), and, when another region lies within [`GAP_REACH`], the
+/// stages whose band would reach it left out (with the default schedule's
+/// rule that a coarse band wider than half the object's radius is
+/// skipped). Errors: [`ObjectFailure::TooClose`].
+fn capped_config(
+    c: &Candidate,
+    base: &FitConfig,
+    closed: bool,
+) -> Result<FitConfig, ObjectFailure> {
+    let mut fit = base.clone();
+    if closed && fit.polarity == Polarity::Auto {
+        fit.polarity = if c.region.touches_border {
+            Polarity::Auto
+        } else if c.bright {
+            Polarity::Positive
+        } else {
+            Polarity::Negative
+        };
+    }
+    let gap = c.region.gap;
+    let too_close = || ObjectFailure::TooClose {
+        neighbour: c.neighbour,
+        gap,
+        needed: MIN_GAP,
+    };
+    if gap < MIN_GAP {
+        return Err(too_close());
+    }
+    if gap >= GAP_REACH as f64 - 1.0 {
+        return Ok(fit);
+    }
+    let cap = gap - BAND_MARGIN;
+    let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
+    let all = fit.stages.clone().unwrap_or_else(default_stages);
+    let n = all.len();
+    let mut kept: Vec<Stage> = all
+        .into_iter()
+        .enumerate()
+        .filter(|(k, s)| s.half_width <= cap && (k + 1 == n || s.half_width <= 0.5 * radius))
+        .map(|(_, s)| s)
+        .collect();
+    if kept.is_empty() {
+        return Err(too_close());
+    }
+    if kept[0].half_width < 4.0 && cap > kept[0].half_width + 0.5 {
+        kept.insert(
+            0,
+            Stage {
+                half_width: cap.min(5.0),
+                elements: Elements::Length(40.0),
+            },
+        );
+    }
+    fit.stages = Some(kept);
+    Ok(fit)
+}
+
+/// A diverged fit, or a closed curve whose area is far from its region's
+/// (more than one pixel all round: it ran to another edge).
+fn check_curve(c: &Candidate, m: &Measurement) -> Option<ObjectFailure> {
+    if let Outcome::Diverged { divergence } = m.outcome {
+        return Some(ObjectFailure::Diverged { divergence });
+    }
+    let region = c.region.pixels as f64;
+    match m.area() {
+        Some(a) if (a.abs() - region).abs() > c.region.boundary as f64 => {
+            Some(ObjectFailure::Wandered {
+                measured: a.abs(),
+                region,
+            })
+        }
+        _ => None,
+    }
+}
+
+/// A diverged model fit, or one whose residual is far above the free
+/// curve's ([`MISFIT_RATIO`]).
+fn check_model(f: &crate::model::ModelFit, m: &Measurement) -> Option<ObjectFailure> {
+    if let Outcome::Diverged { divergence } = f.outcome {
+        return Some(ObjectFailure::Model {
+            message: divergence.to_string(),
+        });
+    }
+    let curve_rms = m.residual_rms();
+    let floor = curve_rms.max(0.01 * f.c.abs());
+    if f.residual_rms.is_nan() || f.residual_rms > MISFIT_RATIO * floor {
+        return Some(ObjectFailure::ModelMisfit {
+            model_rms: f.residual_rms,
+            curve_rms,
+        });
+    }
+    None
+}

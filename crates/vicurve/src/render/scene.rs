@@ -1,0 +1,303 @@
+//! Synthetic scenes of many objects by exact coverage, with their truth:
+//! a random scene of discs and ellipses (some specks, some cut by the
+//! border, optionally a touching pair) and a circle grid deformed by a
+//! known smooth strain field.
+//!
+//! Every shape is painted by the exact coverage of its dense polygon
+//! ([`super::shapes`]); the shapes do not overlap, so the image is exact
+//! everywhere. Then blur, noise and quantisation as [`super::render`].
+
+use super::{blur, coverage, noise, shapes, Method, RenderSpec};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::truth::{Kind, Shape};
+use noise::Rng;
+use serde::{Deserialize, Serialize};
+
+/// What a shape of a scene is, for scoring a multi-object measurement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// A whole object: to be found and measured.
+    Object,
+    /// A speck (under the default least area): never to be reported.
+    Speck,
+    /// Cut by the image border: skipped unless asked.
+    Border,
+    /// One of a pair that touch: to be reported as failed.
+    Touching,
+}
+
+/// One shape of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneItem {
+    /// The exact shape, px.
+    pub shape: Shape,
+    /// Its role.
+    pub role: Role,
+    /// For grid circles: the exact major and minor true strains and the
+    /// major axis direction `[eps1, eps2, angle]` (rad).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strain: Option<[f64; 3]>,
+}
+
+/// A scene: its shapes and how it is rendered. It is its own truth file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scene {
+    /// Image width, px.
+    pub width: usize,
+    /// Image height, px.
+    pub height: usize,
+    /// The shapes.
+    pub items: Vec<SceneItem>,
+    /// Gray level inside the shapes, in `[0, 1]`.
+    pub foreground: f64,
+    /// Gray level elsewhere, in `[0, 1]`.
+    pub background: f64,
+    /// Gaussian blur, px.
+    pub blur_sigma: f64,
+    /// Noise as a fraction of the contrast.
+    pub noise: f64,
+    /// Seed of the noise.
+    pub seed: u64,
+    /// Quantisation, 8 or 16 bits, or none.
+    pub bits: Option<u8>,
+    /// Printed circles' diameter of a grid scene, px.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d0: Option<f64>,
+}
+
+/// Render `scene` (module docs). Errors: those of [`RenderSpec::validate`]
+/// for any shape or setting.
+pub fn render_scene(scene: &Scene) -> Result<Image> {
+    let mut rings = Vec::new();
+    for item in &scene.items {
+        let spec = RenderSpec {
+            width: scene.width,
+            height: scene.height,
+            shape: item.shape.clone(),
+            kind: Kind::Silhouette,
+            foreground: scene.foreground,
+            background: scene.background,
+            method: Method::Coverage,
+            blur_sigma: scene.blur_sigma,
+            noise: scene.noise,
+            seed: scene.seed,
+            bits: scene.bits,
+            ..RenderSpec::default()
+        };
+        spec.validate()?;
+        rings.extend(shapes::region_rings(&spec)?);
+    }
+    let (fg, bg) = (scene.foreground, scene.background);
+    let mut cov = coverage::polygon_coverage(scene.width, scene.height, &rings)?;
+    cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
+    let mut image = Image::new(scene.width, scene.height, cov)?;
+    if scene.blur_sigma > 0.0 {
+        image = blur::gaussian_blur(&image, scene.blur_sigma)?;
+    }
+    noise::add_gaussian_noise(image.data_mut(), scene.noise * (fg - bg).abs(), scene.seed);
+    if let Some(bits) = scene.bits {
+        noise::quantise(image.data_mut(), bits);
+    }
+    Ok(image)
+}
+
+/// Draws a shape: the shape, its centre, its reach (px) and the margin it
+/// keeps from the border.
+type Maker<'a> = dyn Fn(&mut Rng) -> (Shape, [f64; 2], f64, f64) + 'a;
+
+/// A random scene: `objects` discs and ellipses (semi-axes 10 to 25 px,
+/// random orientation) at least `gap` px apart and from the border,
+/// `specks` discs of radius 1 to 3 px, `border` discs cut by the border,
+/// and, when `touching`, one pair of discs 0.5 px apart. Placed by
+/// rejection from `seed` (the same seed gives the same scene).
+///
+/// Errors: [`Error::InvalidParameter`] when the shapes do not fit in the
+/// image (after many tries).
+#[allow(clippy::too_many_arguments)]
+pub fn random_scene(
+    width: usize,
+    height: usize,
+    objects: usize,
+    specks: usize,
+    border: usize,
+    touching: bool,
+    gap: f64,
+    seed: u64,
+) -> Result<Scene> {
+    let mut rng = Rng::new(seed ^ 0x5ce9e);
+    let (w, h) = (width as f64, height as f64);
+    let mut items: Vec<SceneItem> = Vec::new();
+    // Placed shapes as (centre, reach) for the spacing test.
+    let mut placed: Vec<([f64; 2], f64)> = Vec::new();
+    if touching {
+        // Two discs of radius 16, 0.5 px apart, near the centre.
+        let (cx, cy) = (0.5 * w - 16.25 + 0.37, 0.5 * h + 0.21);
+        for dx in [0.0, 32.5] {
+            items.push(SceneItem {
+                shape: Shape::Circle {
+                    cx: cx + dx,
+                    cy,
+                    r: 16.0,
+                },
+                role: Role::Touching,
+                strain: None,
+            });
+        }
+        placed.push(([cx + 16.25, cy], 33.0));
+    }
+    let mut tries = 0usize;
+    let mut place =
+        |items: &mut Vec<SceneItem>, rng: &mut Rng, role: Role, make: &Maker<'_>| -> Result<()> {
+            loop {
+                tries += 1;
+                if tries > 200_000 {
+                    return Err(Error::invalid(
+                        "scene",
+                        "the shapes do not fit in the image: fewer objects or a larger image",
+                    ));
+                }
+                let (shape, c, reach, margin) = make(rng);
+                let inside = c[0] - reach >= margin
+                    && c[1] - reach >= margin
+                    && c[0] + reach <= w - 1.0 - margin
+                    && c[1] + reach <= h - 1.0 - margin;
+                let clear = placed
+                    .iter()
+                    .all(|(p, r)| (p[0] - c[0]).hypot(p[1] - c[1]) >= r + reach + gap);
+                if (inside || role == Role::Border) && clear {
+                    placed.push((c, reach));
+                    items.push(SceneItem {
+                        shape,
+                        role,
+                        strain: None,
+                    });
+                    return Ok(());
+                }
+            }
+        };
+    for _ in 0..border {
+        place(&mut items, &mut rng, Role::Border, &|rng| {
+            let r = 12.0 + 10.0 * rng.uniform();
+            let t = rng.uniform();
+            let side = (rng.uniform() * 4.0) as usize;
+            let c = match side {
+                0 => [t * w, 0.3 * r],
+                1 => [t * w, h - 1.0 - 0.3 * r],
+                2 => [0.3 * r, t * h],
+                _ => [w - 1.0 - 0.3 * r, t * h],
+            };
+            (
+                Shape::Circle {
+                    cx: c[0],
+                    cy: c[1],
+                    r,
+                },
+                c,
+                r,
+                0.0,
+            )
+        })?;
+    }
+    for _ in 0..objects {
+        place(&mut items, &mut rng, Role::Object, &|rng| {
+            let a = 10.0 + 15.0 * rng.uniform();
+            let b = a * (0.6 + 0.4 * rng.uniform());
+            let c = [w * rng.uniform(), h * rng.uniform()];
+            let shape = if rng.uniform() < 0.5 {
+                Shape::Circle {
+                    cx: c[0],
+                    cy: c[1],
+                    r: a,
+                }
+            } else {
+                Shape::Ellipse {
+                    cx: c[0],
+                    cy: c[1],
+                    a,
+                    b,
+                    angle: std::f64::consts::PI * (rng.uniform() - 0.5),
+                }
+            };
+            (shape, c, a, gap)
+        })?;
+    }
+    for _ in 0..specks {
+        place(&mut items, &mut rng, Role::Speck, &|rng| {
+            let r = 1.0 + 2.0 * rng.uniform();
+            let c = [w * rng.uniform(), h * rng.uniform()];
+            (
+                Shape::Circle {
+                    cx: c[0],
+                    cy: c[1],
+                    r,
+                },
+                c,
+                r,
+                gap,
+            )
+        })?;
+    }
+    Ok(Scene {
+        width,
+        height,
+        items,
+        foreground: 0.8,
+        background: 0.2,
+        blur_sigma: 1.0,
+        noise: 0.01,
+        seed,
+        bits: Some(8),
+        d0: None,
+    })
+}
+
+/// A `rows x cols` grid of circles of diameter `d0` px, `pitch` px apart
+/// before deformation, each deformed by the local deformation gradient of
+/// a smooth field (so each becomes an exact ellipse): at the node's
+/// position `(u, v)` in `[0, 1]^2` across the grid, principal stretches
+/// `1 + 0.3 u` and `0.85 + 0.1 v`, major axis at `0.3 + 0.5 (u - v)` rad.
+/// The exact strains are in each item's `strain`. The grid is centred in
+/// an image `pitch` px wider than it on each side.
+pub fn strained_grid(rows: usize, cols: usize, d0: f64, pitch: f64, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed ^ 0x671d);
+    let width = ((cols as f64 + 1.0) * pitch).ceil() as usize;
+    let height = ((rows as f64 + 1.0) * pitch).ceil() as usize;
+    let mut items = Vec::new();
+    for i in 0..rows {
+        for j in 0..cols {
+            let u = j as f64 / (cols.max(2) - 1) as f64;
+            let v = i as f64 / (rows.max(2) - 1) as f64;
+            let (l1, l2) = (1.0 + 0.3 * u, 0.85 + 0.1 * v);
+            let angle = 0.3 + 0.5 * (u - v);
+            // Off-grid centres: sub-pixel positions vary from circle to circle.
+            let jitter = |rng: &mut Rng| rng.uniform() - 0.5;
+            let cx = (j as f64 + 1.0) * pitch + jitter(&mut rng);
+            let cy = (i as f64 + 1.0) * pitch + jitter(&mut rng);
+            items.push(SceneItem {
+                shape: Shape::Ellipse {
+                    cx,
+                    cy,
+                    a: 0.5 * d0 * l1,
+                    b: 0.5 * d0 * l2,
+                    angle,
+                },
+                role: Role::Object,
+                strain: Some([l1.ln(), l2.ln(), angle]),
+            });
+        }
+    }
+    Scene {
+        width,
+        height,
+        items,
+        foreground: 0.8,
+        background: 0.2,
+        blur_sigma: 1.0,
+        noise: 0.01,
+        seed,
+        bits: Some(8),
+        d0: Some(d0),
+    }
+}

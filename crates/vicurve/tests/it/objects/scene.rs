@@ -1,0 +1,166 @@
+//! A random scene: whole objects found and measured, specks and border
+//! objects left out, a touching pair failed with its reason.
+
+use vicurve::model::ShapeModel;
+use vicurve::objects::{measure_all, AllConfig, ObjectFailure};
+use vicurve::render::scene::{random_scene, render_scene, Role};
+use vicurve::truth::Shape;
+
+fn centre(s: &Shape) -> [f64; 2] {
+    match *s {
+        Shape::Circle { cx, cy, .. } | Shape::Ellipse { cx, cy, .. } => [cx, cy],
+        _ => panic!("scenes hold circles and ellipses"),
+    }
+}
+
+/// 30 objects, 20 specks, 5 cut by the border, two discs 0.5 px apart;
+/// blur 1 px, noise 1 %, 8 bits.
+#[test]
+fn every_whole_object_is_measured_and_nothing_else() {
+    let scene = random_scene(640, 480, 30, 20, 5, true, 8.0, 11).unwrap();
+    let image = render_scene(&scene).unwrap();
+    let config = AllConfig {
+        model: Some(ShapeModel::Ellipse),
+        ..AllConfig::default()
+    };
+    let all = measure_all(&image, &config).unwrap();
+    let mut matched = vec![false; all.objects.len()];
+    let mut worst_z = 0.0f64;
+    for item in &scene.items {
+        let c = centre(&item.shape);
+        let hit = all.objects.iter().position(|o| {
+            let r = o.region.centroid;
+            (r[0] - c[0]).hypot(r[1] - c[1]) < 2.0
+        });
+        match item.role {
+            Role::Object => {
+                let k = hit.unwrap_or_else(|| panic!("object at {c:?} not found"));
+                matched[k] = true;
+                let o = &all.objects[k];
+                assert!(o.failure.is_none(), "{c:?}: {:?}", o.failure);
+                let f = o.model.as_ref().unwrap();
+                for (n, truth) in [("cx", c[0]), ("cy", c[1])] {
+                    let p = f.parameter(n).unwrap();
+                    let z = (p.value - truth).abs() / p.sigma;
+                    worst_z = worst_z.max(z);
+                    assert!(
+                        z < 5.0,
+                        "{n} of {c:?}: {} vs {truth} +- {}",
+                        p.value,
+                        p.sigma
+                    );
+                }
+            }
+            Role::Speck | Role::Border => {
+                assert!(hit.is_none(), "{:?} {c:?} reported", item.role);
+            }
+            Role::Touching => {}
+        }
+    }
+    eprintln!("scene: worst centre error / sigma {worst_z:.2}");
+    // What is left is the touching pair: one merged region or two, failed.
+    let rest: Vec<_> = all
+        .objects
+        .iter()
+        .zip(&matched)
+        .filter(|(_, m)| !**m)
+        .map(|(o, _)| o)
+        .collect();
+    assert!((1..=2).contains(&rest.len()), "{}", rest.len());
+    for o in &rest {
+        let f = o.failure.as_ref().expect("the touching pair fails");
+        eprintln!("touching: {f}");
+        assert!(matches!(
+            f,
+            ObjectFailure::TooClose { .. } | ObjectFailure::ModelMisfit { .. }
+        ));
+    }
+    assert_eq!(all.failed(), rest.len());
+}
+
+/// With `include_border`, the objects cut by the border are measured as
+/// open curves.
+#[test]
+fn border_objects_are_measured_open_when_asked() {
+    let scene = random_scene(400, 300, 4, 0, 4, false, 10.0, 5).unwrap();
+    let image = render_scene(&scene).unwrap();
+    let config = AllConfig {
+        include_border: true,
+        ..AllConfig::default()
+    };
+    let all = measure_all(&image, &config).unwrap();
+    let open: Vec<_> = all
+        .objects
+        .iter()
+        .filter(|o| o.region.touches_border)
+        .collect();
+    assert_eq!(open.len(), 4);
+    for o in open {
+        let m = o.measurement.as_ref().expect("measured");
+        assert!(!m.curve.is_closed());
+        assert!(o.failure.is_none(), "{:?}", o.failure);
+        // Every sample lies on the circle it belongs to.
+        let Shape::Circle { cx, cy, r } = scene
+            .items
+            .iter()
+            .filter(|i| i.role == Role::Border)
+            .map(|i| i.shape.clone())
+            .min_by(|a, b| {
+                let d = |s: &Shape| {
+                    let c = centre(s);
+                    (c[0] - o.region.centroid[0]).hypot(c[1] - o.region.centroid[1])
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+        else {
+            panic!()
+        };
+        let worst = m
+            .samples
+            .iter()
+            .map(|s| ((s.x - cx).hypot(s.y - cy) - r).abs())
+            .fold(0.0f64, f64::max);
+        assert!(worst < 0.05, "{worst}");
+    }
+}
+
+/// Numbering is row-major and stable: the same scene shifted by a
+/// fraction of a pixel numbers its objects alike.
+#[test]
+fn numbering_is_stable_under_a_small_shift() {
+    let scene = random_scene(400, 300, 12, 0, 0, false, 10.0, 8).unwrap();
+    let mut moved = scene.clone();
+    for item in &mut moved.items {
+        if let Shape::Circle { cx, cy, .. } | Shape::Ellipse { cx, cy, .. } = &mut item.shape {
+            *cx += 0.4;
+            *cy -= 0.3;
+        }
+    }
+    let found = |s: &vicurve::render::scene::Scene| {
+        vicurve::objects::find::find_objects(&render_scene(s).unwrap(), &AllConfig::default())
+            .unwrap()
+            .candidates
+    };
+    let (a, b) = (found(&scene), found(&moved));
+    assert_eq!(a.len(), 12);
+    assert_eq!(a.len(), b.len());
+    for ca in &a {
+        let cb = b
+            .iter()
+            .min_by(|p, q| {
+                let d = |c: &vicurve::objects::Candidate| {
+                    (c.region.centroid[0] - ca.region.centroid[0])
+                        .hypot(c.region.centroid[1] - ca.region.centroid[1])
+                };
+                d(p).total_cmp(&d(q))
+            })
+            .unwrap();
+        assert_eq!(ca.id, cb.id, "{:?}", ca.region.centroid);
+    }
+    // Row-major: ids increase along each row's centroid x.
+    assert!(a
+        .windows(2)
+        .all(|w| w[1].region.centroid[0] > w[0].region.centroid[0]
+            || w[1].region.centroid[1] > w[0].region.centroid[1]));
+}
