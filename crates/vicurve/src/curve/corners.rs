@@ -34,17 +34,16 @@
 //!   `CORNER_CLEARANCE + BLUR_CLEARANCE * blur` of that wedge; the sides
 //!   are then measured from the pixels beyond, and meet at the corner.
 
-/// Distance from both sides of a corner within which a pixel is left out
-/// of the band, pixels: a pixel's square reaches `sqrt(2) / 2` px from its
-/// centre, plus a margin. Without a clearance the two sides' ends are
-/// pulled towards each other (by about 2e-2 px on the square of
-/// `tests/breaks.rs`, measured once while developing; not asserted).
+/// Distance (px) kept from the region where a corner's image differs from
+/// a side's one-edge model, without blur: a pixel's square reaches
+/// `sqrt(2) / 2` px from its centre, plus a margin. Without a clearance the
+/// two sides' ends are pulled towards each other.
 pub(crate) const CORNER_CLEARANCE: f64 = 1.0;
 /// Blur widths (the Gaussian's standard deviation) added to
 /// [`CORNER_CLEARANCE`]. At 2 of them the other side's blurred edge still
-/// adds 2.3 % of the contrast, but the sides are then extrapolated over a
-/// shorter stretch: wider clearances measured worse corners through noise
-/// (the sweep's `polygon-breaks` cases, see `docs/breaks.md`).
+/// adds 2.3 % of the contrast; a wider clearance leaves each side's end to
+/// be extrapolated further, through the noise (the choice is measured in
+/// the commit that made it).
 pub(crate) const BLUR_CLEARANCE: f64 = 2.0;
 /// Pixels farther from the vertex than this many clearance distances are
 /// never left out: along a very sharp spike the other side runs beside
