@@ -24,12 +24,12 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 use vicurve::curve::SplineCurve;
 use vicurve::derived::{width_profile, WidthAxis};
 use vicurve::fit::{Measurement, Outcome, TrackCache, TrackSnapshot, TrackState};
-use vicurve::interp::{Interpolation, Sampler};
-use vicurve::sequence::{measure_curve, CurveStep};
+use vicurve::interp::Interpolation;
+use vicurve::sequence::{measure_curve, CurveStep, FrameSamplers};
 use vicurve::Image;
 
 pub use vicurve::sequence::Previous;
@@ -232,20 +232,8 @@ pub fn measure_frame(
         Err(e) => return unreadable(job, stem, &e),
     };
     let path_text = frame.input();
-    // One prepared image per interpolation, prepared when a fit first asks
-    // for it: the tracking schedule needs no interpolation (bilinear, which
-    // shares the image's pixels), and the cubic prefilter of a whole frame
-    // would cost more than its fit.
-    let samplers: Vec<(Interpolation, OnceLock<Sampler>)> = Interpolation::ALL
-        .iter()
-        .map(|&k| (k, OnceLock::new()))
-        .collect();
-    let sampler = |k: Interpolation| {
-        samplers
-            .iter()
-            .find(|(kind, _)| *kind == k)
-            .map(|(_, s)| s.get_or_init(|| Sampler::new(&image, k)))
-    };
+    let samplers = FrameSamplers::new(&image);
+    let sampler = |k: Interpolation| samplers.get(k);
     // Curves are independent: measure them in parallel (each fit also
     // uses the thread pool for its bands and matrices).
     let results: Vec<CurveStep> = job

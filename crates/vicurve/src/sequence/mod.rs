@@ -17,10 +17,12 @@
 //! starts from the last good one. [`CurveTracker`] runs the whole loop for
 //! one curve.
 
+mod samplers;
 mod step;
 mod tracker;
 mod written;
 
+pub use samplers::FrameSamplers;
 pub use step::{measure_curve, CurveStep};
 pub use tracker::{CurveTracker, TrackedFrame};
 pub use written::{rebuild, tracking_state};

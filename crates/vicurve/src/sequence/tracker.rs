@@ -1,13 +1,13 @@
 //! [`CurveTracker`]: one curve through a sequence, frame after frame, as
 //! `vicurve track` runs it (without its files).
 
-use std::sync::OnceLock;
-
-use super::{measure_curve, rebuild, tracking_state, CurveStep, Previous, SequenceCurve};
+use super::{
+    measure_curve, rebuild, tracking_state, CurveStep, FrameSamplers, Previous, SequenceCurve,
+};
 use crate::curve::{InitialCurve, SplineCurve};
 use crate::fit::{FitConfig, Outcome, TrackCache, TrackSnapshot};
 use crate::image::Image;
-use crate::interp::{Interpolation, Sampler};
+use crate::interp::Interpolation;
 
 /// One curve tracked through a sequence: the curve's start and
 /// configurations, and what it carries from frame to frame.
@@ -76,16 +76,8 @@ impl CurveTracker {
     /// Measure the curve on frame `image`, named `stem` (recorded by the
     /// next frame as where it started from).
     pub fn measure(&mut self, image: &Image, stem: &str) -> TrackedFrame {
-        let samplers: Vec<(Interpolation, OnceLock<Sampler>)> = Interpolation::ALL
-            .iter()
-            .map(|&k| (k, OnceLock::new()))
-            .collect();
-        let sampler = |k: Interpolation| {
-            samplers
-                .iter()
-                .find(|(kind, _)| *kind == k)
-                .map(|(_, s)| s.get_or_init(|| Sampler::new(image, k)))
-        };
+        let samplers = FrameSamplers::new(image);
+        let sampler = |k: Interpolation| samplers.get(k);
         let spec = SequenceCurve {
             init: &self.init,
             first: &self.first,
