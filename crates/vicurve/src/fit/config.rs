@@ -68,7 +68,9 @@ impl Stage {
 /// last one starts with, so that their noise stays within what the last
 /// stage re-measures. Stages whose band is too wide for the curve (R above
 /// half the radius of a circle of the same length) or that would leave the
-/// image are skipped, the last one excepted. With
+/// image are skipped, the last one excepted; so are the 20 and 10 px stages
+/// when the 5 px one, run first from the start, completes without a new
+/// reference (the start was within its reach everywhere). With
 /// [`FitConfig::blur_correction`] on, one more stage follows: for a
 /// silhouette, the pixel-edge stage ([`crate::virtual_image::Profile::PixelEdge`]:
 /// the step as a pixel records it through the blur, which is fitted); for a

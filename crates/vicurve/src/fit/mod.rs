@@ -11,6 +11,7 @@
 //! # The files, in the order a fit runs them
 //! - [`config`](FitConfig): the configuration, the stages and their
 //!   elements.
+//! - `probe.rs`: a start already near the edge skips the wide stages.
 //! - `schedule.rs`: the stages in turn; after the last, the edge's blur
 //!   chooses a stage to append; the result and, for a tracked frame, the
 //!   band kept for the next one.
@@ -48,6 +49,7 @@ pub mod grow;
 mod loops;
 mod misfit;
 mod output;
+mod probe;
 mod reference;
 mod refine;
 mod robust;

@@ -67,10 +67,17 @@ pub(super) fn refine(
     let params = reference.sample_params((length.ceil() as usize).max(8));
     let mut iterations = 0;
     let mut previous_diff2 = f64::INFINITY;
+    // Halvings of the first elements reach `shortest` up to the rounding of
+    // their count (`Stage::element_count`): elements `longest` long
+    // halve down to `shortest` whether that count rounded up or down.
+    let rounding = 0.5 / corr.basis().n_elements() as f64;
+    // Pixels of curve per unit of parameter (element lengths are in the
+    // latter, `shortest` in the former).
+    let speed = reference.arc_length() / length;
     corr.estimate_noise(&lambda, sampler);
     loop {
         let h = corr.basis().element_length() / 2.0;
-        if h < shortest {
+        if h * speed < shortest * (1.0 - rounding) {
             break;
         }
         let n_el = ((length / h).round() as usize).max(min_el);

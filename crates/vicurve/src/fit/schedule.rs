@@ -74,6 +74,9 @@ pub(super) enum Flow {
     /// The schedule ends here (a failure, or an optional stage that could
     /// not run: the previous result stands).
     Stop,
+    /// The probe's start is farther from the edge than its band reaches
+    /// (see [`super::probe`]): the schedule runs from its first stage.
+    TooFar,
 }
 
 /// The state of a fit across its stages.
@@ -127,6 +130,9 @@ pub(super) struct Schedule<'s> {
     pub matched_added: bool,
     /// The profile of that stage when it is a silhouette's pixel edge.
     pub pixel_edge: Option<Profile>,
+    /// Whether the stage running is the probe ([`super::probe`]), which
+    /// stops at its first new reference.
+    pub probing: bool,
 }
 
 impl<'s> Schedule<'s> {
@@ -184,13 +190,14 @@ impl<'s> Schedule<'s> {
             edge_spread: None,
             matched_added: tracked.is_some(),
             pixel_edge: tracked.map(|t| t.profile()),
+            probing: false,
             config,
         })
     }
 
     /// Run the stages in turn, appending those the edge's blur calls for.
     fn run(&mut self) -> Result<()> {
-        let mut next = 0;
+        let mut next = self.probe()?;
         while next < self.stages.len() {
             let k = next;
             next += 1;
@@ -202,7 +209,7 @@ impl<'s> Schedule<'s> {
             match self.run_stage(&stage, is_last)? {
                 Flow::Completed if is_last => self.append_matched(&stage),
                 Flow::Completed | Flow::Skipped => {}
-                Flow::Stop => break,
+                Flow::Stop | Flow::TooFar => break,
             }
         }
         Ok(())
@@ -210,7 +217,7 @@ impl<'s> Schedule<'s> {
 
     /// Whether a coarse stage's band is too wide for the curve (then it is
     /// skipped, the reason recorded).
-    fn too_wide(&mut self, stage: &Stage) -> bool {
+    pub(super) fn too_wide(&mut self, stage: &Stage) -> bool {
         let r = stage.half_width;
         let length = self.current.arc_length();
         let size = if self.current.is_closed() {

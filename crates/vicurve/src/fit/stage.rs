@@ -67,6 +67,14 @@ const PRE_SETTLE_TOLERANCE: f64 = SETTLE_TOLERANCE;
 /// brings the curve near the edge. Its trimmed ends are then within
 /// `R + PULLED_MARGIN + TRIM_MARGIN` of the border.
 const PULLED_MARGIN: f64 = 1.0;
+/// A stage whose runs with varying levels lose the edge this many times
+/// keeps the global pair of levels for its remaining runs (see
+/// [`StageState::far`]): where the band of a coarse stage cannot reach the
+/// edge from the global pair's converged curve (a lobe beyond the curve
+/// the stage's elements can follow), varying levels lose it again from
+/// every such curve, and the stage would alternate between the two until
+/// its budget is spent. The next, narrower stage tries them again.
+const MAX_LOST_RUNS: usize = 2;
 /// Iteration records reserved per stage at most (see
 /// [`StageReport::history`]): the loop pushes without allocating up to here.
 const HISTORY_RESERVE: usize = 1024;
@@ -116,6 +124,9 @@ pub(super) struct StageState {
     /// sees no edge (see [`Schedule::limits`]). The runs then fit the
     /// global pair of levels, re-referencing, until one converges.
     far: bool,
+    /// Runs of the stage that lost the edge so far: from the
+    /// [`MAX_LOST_RUNS`]th on, the stage keeps the global pair.
+    lost_runs: usize,
     /// The stage's iterations.
     history: Vec<IterationRecord>,
 }
@@ -223,6 +234,7 @@ impl Schedule<'_> {
             tilt: None,
             previous_move: f64::INFINITY,
             far: false,
+            lost_runs: 0,
             history: Vec::with_capacity(config.max_iterations.min(HISTORY_RESERVE)),
         };
         loop {
@@ -322,7 +334,10 @@ impl Schedule<'_> {
         }
         // An open curve measures the stretch whose band fits in the image.
         let trimmed = self.trim_reference(st.stage.half_width, pushed);
-        let length = self.current.param_length();
+        // Elements counted on the curve's length: a reference fitted to a
+        // traced start's samples has a parameter longer than the curve by
+        // the staircase it smoothed away.
+        let length = self.current.arc_length();
         let n_elements = st
             .fixed_elements
             .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
@@ -412,6 +427,9 @@ impl Schedule<'_> {
         lambda: Vec<f64>,
     ) -> Result<Next> {
         let r = st.stage.half_width;
+        if self.probing && matches!(end, Run::Rereference | Run::Lost) {
+            return Ok(Next::Exit(Flow::TooFar));
+        }
         match end {
             // Past the budget (its runs get one iteration each, see
             // `limits`), a run that asks for a new reference or lost the edge
@@ -422,11 +440,13 @@ impl Schedule<'_> {
             Run::Rereference => self.rereference(st, &system, &lambda),
             Run::Lost => {
                 st.far = true;
+                st.lost_runs += 1;
                 Ok(Next::Again)
             }
             // The edge found everywhere: on from there with the levels of
-            // the configuration.
-            Run::Converged if st.far => {
+            // the configuration, unless they lost it again from where the
+            // global pair had found it.
+            Run::Converged if st.far && st.lost_runs < MAX_LOST_RUNS => {
                 st.far = false;
                 self.rereference(st, &system, &lambda)
             }

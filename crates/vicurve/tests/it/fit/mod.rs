@@ -10,6 +10,7 @@ mod far;
 mod grow;
 mod levels;
 mod paper_disc;
+mod probe;
 mod robust;
 mod sharp;
 mod sigma;
