@@ -68,7 +68,12 @@ fn build(args: &Args) -> Result<Job, Failure> {
         list
     };
     let track_stages = args.track_stages.as_deref();
-    let spec = job::curve_spec("curve".into(), &args.init, &args.curve, track_stages)?;
+    let spec = job::curve_spec(
+        "curve".into(),
+        &args.init,
+        &args.curve.options(),
+        track_stages,
+    )?;
     let overlay = match args.overlay.as_deref() {
         None | Some("none") => None,
         Some(o) => Some(job::parse_overlay(o)?),

@@ -9,11 +9,11 @@
 //! chain of pages breaks early (a truncated file) has one more frame after
 //! its last readable page, which fails with the reason.
 
-use crate::failure::Failure;
+use crate::error::{Error, Result};
+use crate::io::TiffStack;
+use crate::Image;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use vicurve::io::TiffStack;
-use vicurve::Image;
 
 /// One frame: an image file or one page of a stack.
 #[derive(Debug, Clone)]
@@ -37,9 +37,9 @@ impl Frame {
     }
 
     /// Decode the frame (the error as the one line the summary records).
-    pub fn decode(&self) -> Result<Image, String> {
+    pub fn decode(&self) -> std::result::Result<Image, String> {
         match &self.page {
-            None => vicurve::io::load_image(&self.path),
+            None => crate::io::load_image(&self.path),
             Some((k, stack)) => stack.read_page(*k),
         }
         .map_err(|e| e.to_string())
@@ -49,7 +49,7 @@ impl Frame {
 /// The frames of `paths`, in order: each multi-page TIFF (by its name's
 /// extension) expanded into its pages. A TIFF that cannot be opened stays
 /// one frame (its decoding fails when it is measured, and is recorded).
-pub fn frames(paths: Vec<PathBuf>) -> Result<Vec<Frame>, Failure> {
+pub fn frames(paths: Vec<PathBuf>) -> Result<Vec<Frame>> {
     let mut out = Vec::with_capacity(paths.len());
     for path in paths {
         let stem = file_stem(&path)?;
@@ -91,9 +91,9 @@ fn is_tiff_name(path: &Path) -> bool {
 }
 
 /// A file's stem, which names its results.
-fn file_stem(p: &Path) -> Result<String, Failure> {
+fn file_stem(p: &Path) -> Result<String> {
     p.file_stem()
         .and_then(|s| s.to_str())
         .map(str::to_string)
-        .ok_or_else(|| Failure::Error(format!("frame {}: no usable file name", p.display())))
+        .ok_or_else(|| Error::job(format!("frame {}: no usable file name", p.display())))
 }
