@@ -6,7 +6,11 @@
 //!   from the iterator one at a time (never ahead of the frame measured);
 //! - a glob pattern: the files sorted by name;
 //! - the path of a TIFF: its pages (`STEM_0000` the first, recorded as
-//!   `PATH#K`, as `vicurve track` names them).
+//!   `PATH#K`, as `vicurve track` names them);
+//! - the path of a video (by its extension): its frames, named as a
+//!   stack's pages, decoded by PyAV when it is installed
+//!   (`vicurve._video`), else by FFmpeg's programs as `vicurve track`
+//!   decodes them ([`vicurve::io::video`]).
 //!
 //! Files and pages can be decoded ahead (see [`Source::peek`]), so that
 //! the next frame is decoded while one is measured.
@@ -16,7 +20,9 @@ use crate::image_arg::ImageArg;
 use pyo3::exceptions::{PyStopIteration, PyTypeError};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
+use vicurve::io::video::{is_video_name, VideoReader};
 use vicurve::io::TiffStack;
+use vicurve::sequence::run::frames::Pages;
 use vicurve::Image;
 
 /// Where the frames come from.
@@ -25,8 +31,12 @@ pub enum Source {
     Items(Py<PyAny>),
     /// Files, in order.
     Paths(Vec<PathBuf>),
-    /// The pages of a multi-page TIFF, and the stem naming them.
-    Stack(Box<TiffStack>, String),
+    /// The pages of a multi-page TIFF or the frames of a video read by
+    /// FFmpeg, and the stem naming them.
+    Stack(Box<Pages>, String),
+    /// The frames of a video decoded by PyAV (an iterator of arrays), the
+    /// stem naming them, the path and the number of frames.
+    Video(Py<PyAny>, String, PathBuf, usize),
 }
 
 /// A frame's pixels, not yet read.
@@ -55,6 +65,22 @@ impl Source {
     pub fn next_item(&self, py: Python<'_>, k: usize) -> PyResult<Option<Item>> {
         match self {
             Source::Stack(..) | Source::Paths(_) => Ok(self.peek(k)),
+            Source::Video(iter, stem, path, n) => {
+                let item = match iter.bind(py).call_method0("__next__") {
+                    Ok(item) => item,
+                    Err(e) if e.is_instance_of::<PyStopIteration>(py) => return Ok(None),
+                    Err(e) => return Err(e),
+                };
+                let pixels = match ImageArg::from_py(&item)? {
+                    ImageArg::Pixels(image, _) => Ok(image),
+                    ImageArg::File(p) => Err(format!("not a frame: {}", p.display())),
+                };
+                Ok(Some(Item {
+                    name: page_name(stem, k, *n),
+                    input: format!("{}#{k}", path.display()),
+                    pixels: Pixels::Ready(pixels),
+                }))
+            }
             Source::Items(iter) => {
                 let item = match iter.bind(py).call_method0("__next__") {
                     Ok(item) => item,
@@ -81,21 +107,18 @@ impl Source {
     /// ahead without the GIL); `None` past the end or for an iterator.
     pub fn peek(&self, k: usize) -> Option<Item> {
         match self {
-            Source::Items(_) => None,
+            Source::Items(_) | Source::Video(..) => None,
             Source::Paths(paths) => paths.get(k).map(|path| Item {
                 name: file_stem(path),
                 input: path.display().to_string(),
                 pixels: Pixels::File(path.clone()),
             }),
             Source::Stack(stack, stem) => {
-                let n = pages(stack);
-                (k < n).then(|| {
-                    let digits = (n - 1).to_string().len().max(4);
-                    Item {
-                        name: format!("{stem}_{k:0digits$}"),
-                        input: format!("{}#{k}", stack.path().display()),
-                        pixels: Pixels::Page(k),
-                    }
+                let n = stack.count();
+                (k < n).then(|| Item {
+                    name: page_name(stem, k, n),
+                    input: format!("{}#{k}", stack_path(stack).display()),
+                    pixels: Pixels::Page(k),
                 })
             }
         }
@@ -106,17 +129,63 @@ impl Source {
         match (pixels, self) {
             (Pixels::Ready(image), _) => image,
             (Pixels::File(path), _) => vicurve::io::load_image(&path).map_err(|e| e.to_string()),
-            (Pixels::Page(k), Source::Stack(stack, _)) => {
-                stack.read_page(k).map_err(|e| e.to_string())
-            }
+            (Pixels::Page(k), Source::Stack(stack, _)) => stack.read(k).map_err(|e| e.to_string()),
             (Pixels::Page(k), _) => Err(format!("page {k}: no stack")),
         }
     }
 }
 
-/// The frames of a stack: its pages, and the missing one of a broken chain.
-fn pages(stack: &TiffStack) -> usize {
-    stack.len() + usize::from(stack.broken().is_some())
+/// Frame `k` of `n` of a stack or video: `STEM_KKKK`, the index padded
+/// to at least 4 digits and to those of the last, as `vicurve track`
+/// names them.
+fn page_name(stem: &str, k: usize, n: usize) -> String {
+    let digits = n.saturating_sub(1).to_string().len().max(4);
+    format!("{stem}_{k:0digits$}")
+}
+
+fn stack_path(pages: &Pages) -> &Path {
+    match pages {
+        Pages::Tiff(s) => s.path(),
+        Pages::Video(v) => v.path(),
+    }
+}
+
+/// A video's frames: PyAV's when it is installed, else FFmpeg's programs'.
+fn video_source(py: Python<'_>, path: PathBuf) -> PyResult<(Source, Option<usize>)> {
+    let stem = file_stem(&path);
+    if !path.is_file() {
+        return Err(to_py_err(vicurve::Error::NotFound { path }));
+    }
+    let opened = py
+        .import("vicurve._video")?
+        .call_method1("open_video", (path.clone(),))?;
+    if !opened.is_none() {
+        let (n, frames): (usize, Bound<'_, PyAny>) = opened.extract()?;
+        return Ok((Source::Video(frames.unbind(), stem, path, n), Some(n)));
+    }
+    match VideoReader::open(&path) {
+        Ok(v) => {
+            let n = v.len();
+            Ok((Source::Stack(Box::new(Pages::Video(v)), stem), Some(n)))
+        }
+        Err(vicurve::Error::UnsupportedImage { .. }) if which_missing() => {
+            Err(pyo3::exceptions::PyImportError::new_err(format!(
+                "{}: reading videos needs PyAV (pip install av), or FFmpeg's ffmpeg and ffprobe programs on PATH",
+                path.display()
+            )))
+        }
+        Err(e) => Err(to_py_err(e)),
+    }
+}
+
+/// Whether `ffprobe` cannot be started (FFmpeg is not installed).
+fn which_missing() -> bool {
+    std::process::Command::new("ffprobe")
+        .arg("-version")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_err()
 }
 
 /// A file's stem, for a frame's name.
@@ -150,8 +219,11 @@ pub fn source_from_py(frames: &Bound<'_, PyAny>) -> PyResult<(Source, Option<usi
             let n = paths.len();
             return Ok((Source::Paths(paths), Some(n)));
         }
-        let stack = TiffStack::open(&path).map_err(to_py_err)?;
-        let n = pages(&stack);
+        if is_video_name(&path) {
+            return video_source(py, path);
+        }
+        let stack = Pages::Tiff(Box::new(TiffStack::open(&path).map_err(to_py_err)?));
+        let n = stack.count();
         return Ok((Source::Stack(Box::new(stack), file_stem(&path)), Some(n)));
     }
     let total = frames.len().ok();

@@ -329,7 +329,11 @@ pub fn progress_bar(py: Python<'_>, progress: bool, total: Option<usize>) -> Opt
 ///   scales an array), an iterable of 2-D arrays or paths (read one at a
 ///   time), a glob pattern such as `"frames/*.png"` (sorted by name), or
 ///   the path of a TIFF file (its pages; a multi-page TIFF is read page by
-///   page).
+///   page), or the path of a video (`.mp4`, `.mkv`, `.avi`, ...: its
+///   frames as 16-bit luma, named as a stack's pages, decoded by PyAV when
+///   it is installed, `pip install av`, else by FFmpeg's `ffmpeg` and
+///   `ffprobe` on PATH as `vicurve track` decodes them; lossy codecs change
+///   the pixels).
 /// - `init`: the first frame's start (`Circle`, `Segment`, `Polyline` or
 ///   the command line's text); every other frame starts from the last good
 ///   result (`tracking=False`: every frame from `init`).

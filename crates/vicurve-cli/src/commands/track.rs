@@ -11,7 +11,9 @@ use std::path::PathBuf;
 pub struct Args {
     /// The frames: a glob pattern (quote it: `'frames/*.tif'`), sorted by
     /// name, or several files in order. A multi-page TIFF stands for its
-    /// pages, frame `STEM_0000` the first.
+    /// pages, a video (`.mp4`, `.mkv`, `.avi`, ...: decoded by FFmpeg's
+    /// `ffmpeg` and `ffprobe`, which must be on PATH) for its frames, frame
+    /// `STEM_0000` the first.
     #[arg(required = true)]
     pub images: Vec<String>,
     /// Starting curve of the first frame, as for `measure`:

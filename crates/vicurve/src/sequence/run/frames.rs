@@ -1,5 +1,5 @@
-//! The frames of a sequence: image files, and the pages of multi-page
-//! TIFF stacks.
+//! The frames of a sequence: image files, the pages of multi-page TIFF
+//! stacks, and the frames of videos.
 //!
 //! A `.tif`/`.tiff` file of more than one page stands for its pages, in
 //! order; page `K` of `stack.tif` is the frame `stack_KKKK` (the index from
@@ -8,8 +8,14 @@
 //! at a time from the open file when the frame is measured. A stack whose
 //! chain of pages breaks early (a truncated file) has one more frame after
 //! its last readable page, which fails with the reason.
+//!
+//! A video (by its name's extension, [`crate::io::video`]) stands for its
+//! frames, named and recorded as a stack's pages are; FFmpeg decodes them
+//! in order. A video that cannot be opened (FFmpeg missing, no video
+//! stream) is an error naming what to do.
 
 use crate::error::{Error, Result};
+use crate::io::video::{is_video_name, VideoReader};
 use crate::io::TiffStack;
 use crate::Image;
 use std::path::{Path, PathBuf};
@@ -22,8 +28,37 @@ pub struct Frame {
     pub path: PathBuf,
     /// Names the frame's results (the file stem, or `STEM_KKKK` for a page).
     pub stem: String,
-    /// The page, and the stack it is read from.
-    pub page: Option<(usize, Arc<TiffStack>)>,
+    /// The page, and the stack or video it is read from.
+    pub page: Option<(usize, Arc<Pages>)>,
+}
+
+/// A file of several frames.
+#[derive(Debug)]
+pub enum Pages {
+    /// A multi-page TIFF.
+    Tiff(Box<TiffStack>),
+    /// A video.
+    Video(VideoReader),
+}
+
+impl Pages {
+    /// Frame `k` of the file.
+    ///
+    /// Errors: the stack's or the video's.
+    pub fn read(&self, k: usize) -> Result<Image> {
+        match self {
+            Pages::Tiff(s) => s.read_page(k),
+            Pages::Video(v) => v.read_frame(k),
+        }
+    }
+
+    /// The number of frames (a broken stack's missing page included).
+    pub fn count(&self) -> usize {
+        match self {
+            Pages::Tiff(s) => pages(s),
+            Pages::Video(v) => v.len(),
+        }
+    }
 }
 
 impl Frame {
@@ -40,24 +75,32 @@ impl Frame {
     pub fn decode(&self) -> std::result::Result<Image, String> {
         match &self.page {
             None => crate::io::load_image(&self.path),
-            Some((k, stack)) => stack.read_page(*k),
+            Some((k, pages)) => pages.read(*k),
         }
         .map_err(|e| e.to_string())
     }
 }
 
-/// The frames of `paths`, in order: each multi-page TIFF (by its name's
-/// extension) expanded into its pages. A TIFF that cannot be opened stays
-/// one frame (its decoding fails when it is measured, and is recorded).
+/// The frames of `paths`, in order: each multi-page TIFF and each video
+/// (by its name's extension) expanded into its frames. A TIFF that cannot
+/// be opened stays one frame (its decoding fails when it is measured, and
+/// is recorded).
+///
+/// Errors: a file with no usable name; a video that cannot be opened.
 pub fn frames(paths: Vec<PathBuf>) -> Result<Vec<Frame>> {
     let mut out = Vec::with_capacity(paths.len());
     for path in paths {
         let stem = file_stem(&path)?;
-        let stack = is_tiff_name(&path)
-            .then(|| TiffStack::open(&path).ok())
-            .flatten()
-            .filter(|s| pages(s) > 1);
-        let Some(stack) = stack else {
+        let multi = if is_video_name(&path) {
+            Some(Pages::Video(VideoReader::open(&path)?))
+        } else {
+            is_tiff_name(&path)
+                .then(|| TiffStack::open(&path).ok())
+                .flatten()
+                .filter(|s| pages(s) > 1)
+                .map(|s| Pages::Tiff(Box::new(s)))
+        };
+        let Some(stack) = multi.filter(|p| p.count() > 0) else {
             out.push(Frame {
                 path,
                 stem,
@@ -65,7 +108,7 @@ pub fn frames(paths: Vec<PathBuf>) -> Result<Vec<Frame>> {
             });
             continue;
         };
-        let n = pages(&stack);
+        let n = stack.count();
         let digits = (n - 1).to_string().len().max(4);
         let stack = Arc::new(stack);
         for k in 0..n {
