@@ -27,6 +27,39 @@ pub(crate) fn count(name: &str, v: i64) -> PyResult<usize> {
     usize::try_from(v).map_err(|_| value_error(format!("invalid {name}: {v} (must be >= 0)")))
 }
 
+/// The fit's keywords that `measure` and `track` share, as Python gives
+/// them (documented with `measure`).
+pub(crate) struct FitOptions<'a, 'py> {
+    pub kind: &'a str,
+    pub stages: Option<&'a Bound<'py, PyAny>>,
+    pub degree: i64,
+    pub polarity: &'a str,
+    pub interpolation: &'a str,
+    pub tolerance: f64,
+    pub max_iterations: i64,
+    pub blur_correction: bool,
+    pub levels: &'a str,
+}
+
+impl FitOptions<'_, '_> {
+    /// The configuration they give (not yet validated: callers add their
+    /// own options first).
+    pub fn config(&self) -> PyResult<FitConfig> {
+        Ok(FitConfig {
+            kind: self.kind.parse().map_err(to_py_err)?,
+            polarity: self.polarity.parse().map_err(to_py_err)?,
+            degree: count("degree", self.degree)?,
+            stages: stages_from_py(self.stages)?,
+            interpolation: self.interpolation.parse().map_err(to_py_err)?,
+            tolerance: self.tolerance,
+            max_iterations: count("max_iterations", self.max_iterations)?,
+            blur_correction: self.blur_correction,
+            levels: self.levels.parse().map_err(to_py_err)?,
+            ..FitConfig::default()
+        })
+    }
+}
+
 /// `stages=`: None (the default schedule), the command line's text
 /// `"20:25,10:50"`, or a sequence of `(R, elements)` pairs where elements
 /// is a number of elements or the text `"40px"` / `"auto"`.
@@ -155,19 +188,19 @@ pub fn measure(
     grow: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMeasurement> {
     let grow = grow_from_py(grow)?;
-    let config = FitConfig {
-        kind: kind.parse().map_err(to_py_err)?,
-        polarity: polarity.parse().map_err(to_py_err)?,
-        degree: count("degree", degree)?,
-        stages: stages_from_py(stages)?,
-        interpolation: interpolation.parse().map_err(to_py_err)?,
+    let mut config = FitOptions {
+        kind,
+        stages,
+        degree,
+        polarity,
+        interpolation,
         tolerance,
-        max_iterations: count("max_iterations", max_iterations)?,
+        max_iterations,
         blur_correction,
-        levels: levels.parse().map_err(to_py_err)?,
-        breaks: breaks.unwrap_or_default(),
-        ..FitConfig::default()
-    };
+        levels,
+    }
+    .config()?;
+    config.breaks = breaks.unwrap_or_default();
     config.validate().map_err(to_py_err)?;
     let init = init_from_py(init)?;
     let image = ImageArg::from_py(image)?;

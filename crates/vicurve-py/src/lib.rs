@@ -19,11 +19,14 @@ mod all;
 pub mod args;
 mod curves;
 mod errors;
+mod frames;
 mod functions;
 mod image_arg;
 mod json;
 mod result;
+mod run;
 mod track;
+mod tracked;
 
 use pyo3::prelude::*;
 
@@ -46,7 +49,8 @@ fn _vicurve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::basis_values, m)?)?;
     m.add_function(wrap_pyfunction!(functions::interpolate, m)?)?;
     m.add_class::<track::Tracker>()?;
-    m.add_class::<track::TrackedFrame>()?;
+    m.add_class::<tracked::TrackedFrame>()?;
     m.add_function(wrap_pyfunction!(track::track, m)?)?;
+    m.add_function(wrap_pyfunction!(run::run, m)?)?;
     Ok(())
 }

@@ -1,78 +1,37 @@
 //! `vicurve.track`: one curve through a sequence of frames, each started
-//! from the previous frame's result, by the library's sequence step
-//! ([`vicurve::sequence::CurveTracker`], the one `vicurve track` runs), as
-//! an iterator: one frame is read, measured (with the GIL released) and
-//! yielded at a time, so that a sequence of any length never sits in
-//! memory.
+//! from the previous frame's result, by the library's sequence step (the
+//! one `vicurve track` runs), as an iterator: one frame is read, measured
+//! (with the GIL released) and yielded at a time, so that a sequence of
+//! any length never sits in memory. Files and stack pages are decoded one
+//! frame ahead, while the frame before is measured.
 //!
-//! Frames: a 3-D array (T, H, W), any iterable of 2-D arrays or paths
-//! (read when their turn comes), a glob pattern (sorted by name), or the
-//! path of a multi-page TIFF (its pages, `STEM_0000` the first, as `vicurve
-//! track` names them).
+//! Without `out_dir` the curve is tracked in memory
+//! ([`vicurve::sequence::CurveTracker`]); with it, by the library's job
+//! runner ([`vicurve::sequence::run::SequenceRun`]), which writes the files
+//! of `vicurve track --out-dir` and skips the frames an earlier run did.
 
 use crate::curves::{init_from_py, InitArg};
 use crate::errors::{to_py_err, value_error};
-use crate::functions::{count, stages_from_py};
-use crate::image_arg::ImageArg;
+use crate::frames::{source_from_py, Item, Pixels, Source};
+use crate::functions::FitOptions;
 use crate::result::PyMeasurement;
-use numpy::IntoPyArray;
-use pyo3::exceptions::PyStopIteration;
+use crate::tracked::{outcome_name, Summary, TrackedFrame};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::{Path, PathBuf};
-use vicurve::fit::{FitConfig, Outcome};
-use vicurve::io::TiffStack;
+use std::path::PathBuf;
+use vicurve::curve::InitialCurve;
+use vicurve::fit::FitConfig;
+use vicurve::sequence::run::frame::FrameOutput;
+use vicurve::sequence::run::job::{CurveSpec, Job, JobOutputs};
+use vicurve::sequence::run::summary::{cell, split_csv};
+use vicurve::sequence::run::SequenceRun;
 use vicurve::sequence::{tracked_config, CurveTracker};
+use vicurve::Image;
 
-/// Where the frames come from.
-enum Source {
-    /// A Python iterator of 2-D arrays or paths.
-    Items(Py<PyAny>),
-    /// The pages of a multi-page TIFF, and the stem naming them.
-    Stack(Box<TiffStack>, String),
-}
-
-/// The per-frame values of the summary, in frame order.
-#[derive(Default)]
-struct Summary {
-    frame: Vec<usize>,
-    name: Vec<String>,
-    outcome: Vec<String>,
-    reason: Vec<String>,
-    started_from: Vec<String>,
-    iterations: Vec<i64>,
-    residual: Vec<f64>,
-    length: Vec<f64>,
-    area: Vec<f64>,
-}
-
-/// One frame of `vicurve.track`: `index` (from 0), `name` (the file stem,
-/// `STEM_KKKK` for page K of a stack, `frame_KKKK` for an array), `input`
-/// (the path, `PATH#K` for a page), `ok` (a curve to go on from: converged
-/// or at its iteration limit), `outcome` ("converged", "iteration_limit",
-/// "diverged" or "failed": nothing measured), `reason` (why it failed, or a
-/// retry), `started_from` ("init" or the name of the frame the fit started
-/// from) and `result` (a `vicurve.Result`, None when nothing was measured).
-#[pyclass(module = "vicurve", name = "TrackedFrame", frozen, get_all)]
-pub struct TrackedFrame {
-    index: usize,
-    name: String,
-    input: String,
-    ok: bool,
-    outcome: String,
-    reason: Option<String>,
-    started_from: String,
-    result: Option<Py<PyMeasurement>>,
-}
-
-#[pymethods]
-impl TrackedFrame {
-    fn __repr__(&self) -> String {
-        format!(
-            "TrackedFrame(index={}, name={:?}, outcome={:?})",
-            self.index, self.name, self.outcome
-        )
-    }
+/// How the frames are measured: in memory, or by the job runner with files.
+enum Engine {
+    Memory(Box<CurveTracker>),
+    Files(Box<SequenceRun>),
 }
 
 /// The iterator `vicurve.track` returns; `summary()` gives the frames
@@ -82,50 +41,81 @@ pub struct Tracker {
     source: Source,
     next: usize,
     total: Option<usize>,
-    tracker: CurveTracker,
+    engine: Engine,
+    /// The next frame, its pixels decoded ahead.
+    ahead: Option<Item>,
     summary: Summary,
     progress: Option<Py<PyAny>>,
 }
 
+/// What measuring a frame gave, by engine.
+enum Measured {
+    Memory(Box<vicurve::sequence::TrackedFrame>, (usize, usize)),
+    Files(FrameOutput, Option<(usize, usize)>),
+}
+
 impl Tracker {
-    /// The next frame's image (or why it cannot be read), name and input;
-    /// `None` at the end.
-    #[allow(clippy::type_complexity)]
-    fn read_next(
-        &mut self,
-        py: Python<'_>,
-    ) -> PyResult<Option<(Result<vicurve::Image, String>, String, String)>> {
+    /// Decode and measure `item` (without the GIL), decoding the frame
+    /// after it meanwhile when it is a file or page that will be measured.
+    fn measure(&mut self, py: Python<'_>, item: Item) -> Measured {
         let k = self.next;
-        match &self.source {
-            Source::Stack(stack, stem) => {
-                let n = stack.len() + usize::from(stack.broken().is_some());
-                if k >= n {
-                    return Ok(None);
-                }
-                let digits = (n - 1).to_string().len().max(4);
-                let image = py.detach(|| stack.read_page(k)).map_err(|e| e.to_string());
-                let input = format!("{}#{k}", stack.path().display());
-                Ok(Some((image, format!("{stem}_{k:0digits$}"), input)))
-            }
-            Source::Items(iter) => {
-                let item = match iter.bind(py).call_method0("__next__") {
-                    Ok(item) => item,
-                    Err(e) if e.is_instance_of::<PyStopIteration>(py) => return Ok(None),
-                    Err(e) => return Err(e),
-                };
-                match ImageArg::from_py(&item)? {
-                    ImageArg::File(path) => {
-                        let image = py
-                            .detach(|| vicurve::io::load_image(&path))
-                            .map_err(|e| e.to_string());
-                        Ok(Some((image, file_stem(&path), path.display().to_string())))
-                    }
-                    ImageArg::Pixels(image, text) => {
-                        Ok(Some((Ok(image), format!("frame_{k:04}"), text)))
-                    }
-                }
+        let source = &self.source;
+        let ahead = source.peek(k + 1).filter(|a| match &self.engine {
+            Engine::Files(run) => !run.is_done(&a.name),
+            Engine::Memory(_) => true,
+        });
+        let engine = &mut self.engine;
+        let (name, input) = (item.name, item.input);
+        let (measured, ahead) = py.detach(|| {
+            rayon::join(
+                || {
+                    let image = source.load(item.pixels);
+                    measure_one(engine, (&name, &input), image)
+                },
+                || {
+                    ahead.map(|a| Item {
+                        pixels: Pixels::Ready(source.load(a.pixels)),
+                        ..a
+                    })
+                },
+            )
+        });
+        self.ahead = ahead;
+        measured
+    }
+}
+
+/// Measure one decoded frame with `engine`.
+fn measure_one(
+    engine: &mut Engine,
+    (name, input): (&str, &str),
+    image: Result<Image, String>,
+) -> Measured {
+    match (engine, image) {
+        (Engine::Memory(tracker), Ok(image)) => {
+            let size = (image.width(), image.height());
+            Measured::Memory(Box::new(tracker.measure(&image, name)), size)
+        }
+        (Engine::Memory(_), Err(e)) => Measured::Files(failed_output(e), None),
+        (Engine::Files(run), image) => {
+            let size = image.as_ref().ok().map(|i| (i.width(), i.height()));
+            match run.measure((name, input), image, None) {
+                Ok(out) => Measured::Files(out, size),
+                Err(e) => Measured::Files(failed_output(e.to_string()), None),
             }
         }
+    }
+}
+
+/// A frame with nothing measured, and why.
+fn failed_output(reason: String) -> FrameOutput {
+    FrameOutput {
+        steps: Vec::new(),
+        rows: Vec::new(),
+        good: vec![None],
+        states: vec![None],
+        bands: vec![None],
+        problems: vec![reason],
     }
 }
 
@@ -136,73 +126,37 @@ impl Tracker {
     }
 
     fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<TrackedFrame>> {
-        let Some((image, name, input)) = self.read_next(py)? else {
+        let k = self.next;
+        let item = match self.ahead.take() {
+            Some(item) => Some(item),
+            None => self.source.next_item(py, k)?,
+        };
+        let Some(item) = item else {
             if let Some(bar) = self.progress.take() {
                 bar.bind(py).call_method0("close")?;
             }
             return Ok(None);
         };
-        let index = self.next;
+        let resumed = match &mut self.engine {
+            Engine::Files(run) => run.resume(&item.name, &item.input).map_err(to_py_err)?,
+            Engine::Memory(_) => None,
+        };
+        let frame = match resumed {
+            Some(rows) => {
+                let row = rows.first().cloned().unwrap_or_default();
+                let frame = frame_from_row(k, item, &row);
+                self.summary.record_row(&frame, &row);
+                frame
+            }
+            None => {
+                let (name, input) = (item.name.clone(), item.input.clone());
+                let measured = self.measure(py, item);
+                let frame = tracked_frame(py, (k, name, input), measured)?;
+                self.summary.record(&frame);
+                frame
+            }
+        };
         self.next += 1;
-        let tracker = &mut self.tracker;
-        let measured = match image {
-            Ok(image) => {
-                let size = (image.width(), image.height());
-                Ok((py.detach(|| tracker.measure(&image, &name)), size))
-            }
-            Err(e) => Err(e),
-        };
-        let frame = match measured {
-            Err(reason) => TrackedFrame {
-                index,
-                name,
-                input,
-                ok: false,
-                outcome: "failed".into(),
-                reason: Some(reason),
-                started_from: String::new(),
-                result: None,
-            },
-            Ok((t, size)) => {
-                let step = t.step;
-                let (outcome, result) = match step.measured {
-                    Err(_) => ("failed".to_string(), None),
-                    Ok(m) => {
-                        let outcome = match m.outcome {
-                            Outcome::Converged => "converged",
-                            Outcome::IterationLimit => "iteration_limit",
-                            Outcome::Diverged { .. } => "diverged",
-                        };
-                        let r = PyMeasurement {
-                            measurement: m,
-                            init: step.init,
-                            config: step.config,
-                            source: input.clone(),
-                            size,
-                            start: None,
-                            grow: None,
-                        };
-                        (outcome.to_string(), Some(Py::new(py, r)?))
-                    }
-                };
-                let reason = match (t.failure, step.note.is_empty()) {
-                    (Some(f), _) => Some(f),
-                    (None, false) => Some(step.note),
-                    (None, true) => None,
-                };
-                TrackedFrame {
-                    index,
-                    name,
-                    input,
-                    ok: t.good.is_some(),
-                    outcome,
-                    reason,
-                    started_from: step.started_from,
-                    result,
-                }
-            }
-        };
-        self.record(py, &frame);
         if let Some(bar) = &self.progress {
             bar.bind(py).call_method1("update", (1,))?;
         }
@@ -219,91 +173,153 @@ impl Tracker {
     /// The frames yielded so far, one row each: `frame`, `name`, `outcome`,
     /// `reason`, `started_from`, `iterations`, `residual` (RMS, gray
     /// levels), `length` and `area` (pixels; NaN for an open curve or a
-    /// failed frame). A pandas DataFrame when pandas is installed (or
-    /// `pandas=False` not given), else a dict of NumPy arrays.
+    /// failed frame; for a resumed frame as its summary row has them). A
+    /// pandas DataFrame when pandas is installed (and `pandas=False` not
+    /// given), else a dict of NumPy arrays.
     #[pyo3(signature = (pandas = true))]
     fn summary<'py>(&self, py: Python<'py>, pandas: bool) -> PyResult<Bound<'py, PyAny>> {
-        let s = &self.summary;
-        let d = PyDict::new(py);
-        let np = py.import("numpy")?;
-        let strings = |v: &Vec<String>| np.call_method1("array", (v.clone(),));
-        d.set_item("frame", s.frame.clone().into_pyarray(py))?;
-        d.set_item("name", strings(&s.name)?)?;
-        d.set_item("outcome", strings(&s.outcome)?)?;
-        d.set_item("reason", strings(&s.reason)?)?;
-        d.set_item("started_from", strings(&s.started_from)?)?;
-        d.set_item("iterations", s.iterations.clone().into_pyarray(py))?;
-        d.set_item("residual", s.residual.clone().into_pyarray(py))?;
-        d.set_item("length", s.length.clone().into_pyarray(py))?;
-        d.set_item("area", s.area.clone().into_pyarray(py))?;
-        if pandas {
-            if let Ok(pd) = py.import("pandas") {
-                return pd.call_method1("DataFrame", (d,));
-            }
+        self.summary.to_py(py, pandas)
+    }
+}
+
+/// A frame done by an earlier run, from its summary row.
+fn frame_from_row(index: usize, item: Item, row: &str) -> TrackedFrame {
+    let cells = split_csv(row);
+    let outcome = cell(&cells, "outcome").to_string();
+    let reason = cell(&cells, "reason").to_string();
+    TrackedFrame {
+        index,
+        name: item.name,
+        input: item.input,
+        ok: outcome == "converged" || outcome == "iteration_limit",
+        outcome,
+        reason: (!reason.is_empty()).then_some(reason),
+        started_from: cell(&cells, "started_from").to_string(),
+        result: None,
+        resumed: true,
+    }
+}
+
+/// The frame yielded for what measuring it gave.
+fn tracked_frame(
+    py: Python<'_>,
+    (index, name, input): (usize, String, String),
+    measured: Measured,
+) -> PyResult<TrackedFrame> {
+    let (step, ok, reason, size) = match measured {
+        Measured::Memory(t, size) => {
+            let t = *t;
+            let reason = t.failure.or_else(|| Some(t.step.note.clone()));
+            (Some(t.step), t.good.is_some(), reason, Some(size))
         }
-        Ok(d.into_any())
-    }
-}
-
-impl Tracker {
-    fn record(&mut self, py: Python<'_>, f: &TrackedFrame) {
-        let s = &mut self.summary;
-        s.frame.push(f.index);
-        s.name.push(f.name.clone());
-        s.outcome.push(f.outcome.clone());
-        s.reason.push(f.reason.clone().unwrap_or_default());
-        s.started_from.push(f.started_from.clone());
-        let m = f.result.as_ref().map(|r| &r.get().measurement);
-        let _ = py;
-        s.iterations
-            .push(m.map_or(-1, |m| i64::try_from(m.iterations()).unwrap_or(i64::MAX)));
-        s.residual.push(m.map_or(f64::NAN, |m| m.residual_rms()));
-        s.length.push(m.map_or(f64::NAN, |m| m.length()));
-        s.area.push(m.and_then(|m| m.area()).unwrap_or(f64::NAN));
-    }
-}
-
-/// A file's stem, for a frame's name.
-fn file_stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
-/// Whether a text is a glob pattern.
-fn has_wildcard(s: &str) -> bool {
-    s.contains(['*', '?', '['])
-}
-
-/// The frames argument as a source, and its length when known.
-fn source_from_py(frames: &Bound<'_, PyAny>) -> PyResult<(Source, Option<usize>)> {
-    let py = frames.py();
-    let is_path =
-        frames.is_instance_of::<pyo3::types::PyString>() || frames.hasattr("__fspath__")?;
-    if is_path {
-        let path: PathBuf = frames.extract()?;
-        let text = path.display().to_string();
-        if has_wildcard(&text) {
-            let glob = py.import("glob")?;
-            let list = glob.call_method1("glob", (text.clone(),))?;
-            list.call_method0("sort")?;
-            let n = list.len()?;
-            if n == 0 {
-                return Err(value_error(format!("frames: no file matches '{text}'")));
-            }
-            return Ok((Source::Items(list.try_iter()?.into_any().unbind()), Some(n)));
+        Measured::Files(mut out, size) => {
+            let row = out.rows.first().map(|r| r.to_line()).unwrap_or_default();
+            let reason = Some(cell(&split_csv(&row), "reason").to_string())
+                .filter(|r| !r.is_empty())
+                .or_else(|| out.problems.first().cloned());
+            let ok = out.good.first().is_some_and(Option::is_some);
+            let step = (!out.steps.is_empty()).then(|| out.steps.swap_remove(0));
+            (step, ok, reason, size)
         }
-        let stack = TiffStack::open(&path).map_err(to_py_err)?;
-        let n = stack.len() + usize::from(stack.broken().is_some());
-        return Ok((Source::Stack(Box::new(stack), file_stem(&path)), Some(n)));
+    };
+    let reason = reason.filter(|r| !r.is_empty());
+    let Some(step) = step else {
+        return Ok(failed_frame((index, name, input), reason));
+    };
+    let (outcome, result, reason) = match step.measured {
+        Err(e) => ("failed".to_string(), None, reason.or(Some(e))),
+        Ok(m) => {
+            let outcome = outcome_name(&m).to_string();
+            let r = PyMeasurement {
+                measurement: m,
+                init: step.init,
+                config: step.config,
+                source: input.clone(),
+                size: size.unwrap_or_default(),
+                start: None,
+                grow: None,
+            };
+            (outcome, Some(Py::new(py, r)?), reason)
+        }
+    };
+    Ok(TrackedFrame {
+        index,
+        name,
+        input,
+        ok,
+        outcome,
+        reason,
+        started_from: step.started_from,
+        result,
+        resumed: false,
+    })
+}
+
+/// A frame with nothing measured (unreadable, or no start).
+fn failed_frame(
+    (index, name, input): (usize, String, String),
+    reason: Option<String>,
+) -> TrackedFrame {
+    TrackedFrame {
+        index,
+        name,
+        input,
+        ok: false,
+        outcome: "failed".into(),
+        reason,
+        started_from: String::new(),
+        result: None,
+        resumed: false,
     }
-    let total = frames.len().ok();
-    let iter = frames.try_iter().map_err(|_| {
-        pyo3::exceptions::PyTypeError::new_err(
-            "frames: expected a 3-D array (T, H, W), an iterable of 2-D arrays or paths, a glob pattern or a multi-page TIFF path",
-        )
-    })?;
-    Ok((Source::Items(iter.into_any().unbind()), total))
+}
+
+/// The job `vicurve track FRAMES --init ... --out-dir DIR` runs, for the
+/// curve `init` with `first` and `tracked` (the job's frames come from the
+/// iterator, one at a time).
+fn files_engine(
+    out_dir: PathBuf,
+    curve: (InitialCurve, FitConfig, FitConfig, bool),
+    tracking: bool,
+    force: bool,
+) -> PyResult<Engine> {
+    let (init, first, tracked, tracking_schedule) = curve;
+    let job = Job {
+        images: Vec::new(),
+        out_dir,
+        track: tracking,
+        curves: vec![CurveSpec {
+            name: "curve".into(),
+            init,
+            first,
+            tracked,
+            tracking_schedule,
+        }],
+        widths: Vec::new(),
+        outputs: JobOutputs {
+            points: true,
+            overlay: None,
+            plots: false,
+        },
+        shard: None,
+    };
+    let run = SequenceRun::start(job, force).map_err(to_py_err)?;
+    Ok(Engine::Files(Box::new(run)))
+}
+
+/// A tqdm bar of `total` frames, when tqdm is installed and `progress`.
+pub fn progress_bar(py: Python<'_>, progress: bool, total: Option<usize>) -> Option<Py<PyAny>> {
+    if !progress {
+        return None;
+    }
+    py.import("tqdm")
+        .and_then(|t| {
+            let kw = PyDict::new(py);
+            kw.set_item("total", total)?;
+            kw.set_item("unit", "frame")?;
+            t.getattr("tqdm")?.call((), Some(&kw))
+        })
+        .ok()
+        .map(Bound::unbind)
 }
 
 /// Track a curve through a sequence of frames; returns an iterator that
@@ -313,7 +329,11 @@ fn source_from_py(frames: &Bound<'_, PyAny>) -> PyResult<(Source, Option<usize>)
 ///   scales an array), an iterable of 2-D arrays or paths (read one at a
 ///   time), a glob pattern such as `"frames/*.png"` (sorted by name), or
 ///   the path of a TIFF file (its pages; a multi-page TIFF is read page by
-///   page).
+///   page), or the path of a video (`.mp4`, `.mkv`, `.avi`, ...: its
+///   frames as 16-bit luma, named as a stack's pages, decoded by PyAV when
+///   it is installed, `pip install av`, else by FFmpeg's `ffmpeg` and
+///   `ffprobe` on PATH as `vicurve track` decodes them; lossy codecs change
+///   the pixels).
 /// - `init`: the first frame's start (`Circle`, `Segment`, `Polyline` or
 ///   the command line's text); every other frame starts from the last good
 ///   result (`tracking=False`: every frame from `init`).
@@ -323,6 +343,13 @@ fn source_from_py(frames: &Bound<'_, PyAny>) -> PyResult<(Source, Option<usize>)
 ///   alone from the previous frame's blur and elements), "default" or the
 ///   text "R:N,...".
 /// - the other options as for `measure`.
+/// - `out_dir`: a folder for the files of `vicurve track --out-dir` (per
+///   frame `NAME.json` and `NAME.csv`, `summary.csv`, `job.json`). A
+///   frame already done there by an earlier run of the same job (the
+///   command line's or this function's) is not measured again: it is
+///   yielded with `resumed=True` (and `result=None`), and tracking goes on
+///   from its curve as written, with the results of an uninterrupted run.
+///   `force=True` measures every frame again.
 /// - `progress`: a progress bar (tqdm, when it is installed).
 ///
 /// A frame that cannot be read or measured is yielded with `ok=False` and
@@ -332,7 +359,8 @@ fn source_from_py(frames: &Bound<'_, PyAny>) -> PyResult<(Source, Option<usize>)
 #[pyo3(signature = (
     frames, init, *, kind = "silhouette", stages = None, track_stages = None, tracking = true,
     degree = 3, polarity = "auto", interpolation = "cubic", tolerance = 1e-4,
-    max_iterations = 200, blur_correction = true, levels = "varying", progress = true
+    max_iterations = 200, blur_correction = true, levels = "varying", out_dir = None,
+    force = false, progress = true
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn track(
@@ -349,20 +377,22 @@ pub fn track(
     max_iterations: i64,
     blur_correction: bool,
     levels: &str,
+    out_dir: Option<PathBuf>,
+    force: bool,
     progress: bool,
 ) -> PyResult<Tracker> {
-    let first = FitConfig {
-        kind: kind.parse().map_err(to_py_err)?,
-        polarity: polarity.parse().map_err(to_py_err)?,
-        degree: count("degree", degree)?,
-        stages: stages_from_py(stages)?,
-        interpolation: interpolation.parse().map_err(to_py_err)?,
+    let first = FitOptions {
+        kind,
+        stages,
+        degree,
+        polarity,
+        interpolation,
         tolerance,
-        max_iterations: count("max_iterations", max_iterations)?,
+        max_iterations,
         blur_correction,
-        levels: levels.parse().map_err(to_py_err)?,
-        ..FitConfig::default()
-    };
+        levels,
+    }
+    .config()?;
     first.validate().map_err(to_py_err)?;
     let (tracked, schedule) = tracked_config(&first, track_stages).map_err(to_py_err)?;
     let InitArg::Curve(init) = init_from_py(Some(init))? else {
@@ -371,26 +401,19 @@ pub fn track(
         ));
     };
     let (source, total) = source_from_py(frames)?;
-    let py = frames.py();
-    let progress = if progress {
-        py.import("tqdm")
-            .and_then(|t| {
-                let kw = PyDict::new(py);
-                kw.set_item("total", total)?;
-                kw.set_item("unit", "frame")?;
-                t.getattr("tqdm")?.call((), Some(&kw))
-            })
-            .ok()
-            .map(Bound::unbind)
-    } else {
-        None
+    let engine = match out_dir {
+        Some(dir) => files_engine(dir, (init, first, tracked, schedule), tracking, force)?,
+        None => Engine::Memory(Box::new(CurveTracker::new(
+            init, first, tracked, schedule, tracking,
+        ))),
     };
     Ok(Tracker {
         source,
         next: 0,
         total,
-        tracker: CurveTracker::new(init, first, tracked, schedule, tracking),
+        engine,
+        ahead: None,
         summary: Summary::default(),
-        progress,
+        progress: progress_bar(frames.py(), progress, total),
     })
 }

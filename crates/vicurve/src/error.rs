@@ -144,6 +144,15 @@ pub enum Error {
         /// Why, and what to try.
         reason: String,
     },
+    /// A sequence that cannot run: a job file that cannot be read or
+    /// checked, an output folder holding another job's results, frames
+    /// whose names collide. The reason is the whole message (one line,
+    /// saying what to do).
+    #[error("{reason}")]
+    Job {
+        /// What is wrong and what to do.
+        reason: String,
+    },
 }
 
 /// The fit's reading of a solver error: a matrix that is not positive
@@ -165,6 +174,13 @@ impl From<SolverError> for Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// Build an [`Error::Job`].
+    pub fn job(reason: impl Into<String>) -> Self {
+        Error::Job {
+            reason: reason.into(),
+        }
+    }
+
     /// Build an [`Error::InvalidParameter`].
     pub fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         Error::InvalidParameter {

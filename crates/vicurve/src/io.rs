@@ -8,10 +8,14 @@
 //! Polylines: CSV text, one point `x,y` (pixels, x = column, y = row, see
 //! [`crate::image`]) per row; see [`parse_polyline_csv`].
 //!
-//! Multi-page TIFF stacks, page by page: [`stack`].
+//! Multi-page TIFF stacks, page by page: [`stack`]; videos, by FFmpeg:
+//! [`video`]. Result files written whole or not at all: [`write`].
 
 pub mod stack;
+pub mod video;
+pub mod write;
 pub use stack::{page_count, TiffStack};
+pub use write::{write_atomic, write_points_csv};
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Write};

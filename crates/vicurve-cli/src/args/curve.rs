@@ -3,9 +3,9 @@
 
 use crate::failure::Failure;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser as _};
-use std::path::Path;
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{parse_stages, Coords, FitConfig, LevelModel};
+use vicurve::fit::{Coords, FitConfig, LevelModel};
+use vicurve::sequence::run::CurveOptions;
 
 /// The options of one curve: `measure`'s and `track`'s flags, and the keys
 /// of a job file's `[[curve]]` (same names, `_` for `-`).
@@ -67,43 +67,30 @@ impl Default for CurveArgs {
 }
 
 impl CurveArgs {
-    /// The fit configuration (not yet validated: callers add their own
-    /// options first). The values are parsed by the library's `FromStr`.
-    pub fn config(&self) -> Result<FitConfig, Failure> {
-        let mut config = FitConfig {
-            kind: self.kind.parse()?,
-            polarity: self.polarity.parse()?,
+    /// The options as the library's job runner takes them.
+    pub fn options(&self) -> CurveOptions {
+        CurveOptions {
+            closed: self.closed,
+            kind: self.kind.clone(),
+            polarity: self.polarity.clone(),
+            stages: self.stages.clone(),
             degree: self.degree,
+            interp: self.interp.clone(),
             tolerance: self.tolerance,
-            max_iterations: self.max_iter,
-            blur_correction: !self.no_blur_correction,
-            ..FitConfig::default()
-        };
-        if let Some(s) = &self.stages {
-            config.stages = Some(parse_stages(s)?);
+            max_iter: self.max_iter,
+            no_blur_correction: self.no_blur_correction,
         }
-        if let Some(i) = &self.interp {
-            config.interpolation = i.parse()?;
-        }
-        Ok(config)
     }
 
-    /// The starting curve `spec` (`circle:...`, `segment:...` or
-    /// `polyline:FILE`, whose file is read), closed with `--closed`.
+    /// The fit configuration (not yet validated: callers add their own
+    /// options first); see [`CurveOptions::config`].
+    pub fn config(&self) -> Result<FitConfig, Failure> {
+        Ok(self.options().config()?)
+    }
+
+    /// The starting curve `spec`; see [`CurveOptions::init`].
     pub fn init(&self, spec: &str) -> Result<InitialCurve, Failure> {
-        if let Some(file) = spec.strip_prefix("polyline:") {
-            let points = vicurve::io::read_polyline_csv(Path::new(file))?;
-            return Ok(InitialCurve::Polyline {
-                points,
-                closed: self.closed,
-            });
-        }
-        if self.closed {
-            return Err(Failure::Error(
-                "--closed applies to polyline: starts only".into(),
-            ));
-        }
-        Ok(spec.parse::<InitialCurve>()?)
+        Ok(self.options().init(spec)?)
     }
 }
 
@@ -170,6 +157,13 @@ mod tests {
     use vicurve::fit::Polarity;
     use vicurve::interp::Interpolation;
     use vicurve::virtual_image::Kind;
+
+    /// A job file's curve gets the command line's defaults for the keys it
+    /// leaves out: the library's defaults are the flags'.
+    #[test]
+    fn the_librarys_curve_defaults_are_the_flags() {
+        assert_eq!(CurveArgs::default().options(), CurveOptions::default());
+    }
 
     #[test]
     fn levels_argument() {

@@ -11,7 +11,9 @@ use std::path::PathBuf;
 pub struct Args {
     /// The frames: a glob pattern (quote it: `'frames/*.tif'`), sorted by
     /// name, or several files in order. A multi-page TIFF stands for its
-    /// pages, frame `STEM_0000` the first.
+    /// pages, a video (`.mp4`, `.mkv`, `.avi`, ...: decoded by FFmpeg's
+    /// `ffmpeg` and `ffprobe`, which must be on PATH) for its frames, frame
+    /// `STEM_0000` the first.
     #[arg(required = true)]
     pub images: Vec<String>,
     /// Starting curve of the first frame, as for `measure`:
@@ -68,7 +70,12 @@ fn build(args: &Args) -> Result<Job, Failure> {
         list
     };
     let track_stages = args.track_stages.as_deref();
-    let spec = job::curve_spec("curve".into(), &args.init, &args.curve, track_stages)?;
+    let spec = job::curve_spec(
+        "curve".into(),
+        &args.init,
+        &args.curve.options(),
+        track_stages,
+    )?;
     let overlay = match args.overlay.as_deref() {
         None | Some("none") => None,
         Some(o) => Some(job::parse_overlay(o)?),

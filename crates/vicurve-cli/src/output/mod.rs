@@ -17,9 +17,7 @@ pub mod objects;
 pub mod overlay;
 
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
-use vicurve::fit::Measurement;
 
 /// The record `measure --out` writes lives in the library, so that the
 /// Python package writes the same document.
@@ -32,53 +30,9 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), String> {
     std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-/// Write the samples as CSV: the header
-/// `s,x,y,nx,ny,sigma,weight,sigma_noise,misfit` (a contract: other tools
-/// read the columns by these names), then one row per sample (`sigma`: the
-/// position's uncertainty in px, model misfit included; `weight`: the share
-/// of the band kept by the robust weights there, 1 where nothing was
-/// down-weighted; `sigma_noise`: the noise's share of `sigma`; `misfit`: 1
-/// where the model misfits, else 0).
-pub fn write_points_csv(path: &Path, m: &Measurement) -> Result<(), String> {
-    let err = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
-    let file = std::fs::File::create(path).map_err(err)?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "s,x,y,nx,ny,sigma,weight,sigma_noise,misfit").map_err(err)?;
-    for s in &m.samples {
-        writeln!(
-            w,
-            "{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3},{:.3e},{}",
-            s.s,
-            s.x,
-            s.y,
-            s.nx,
-            s.ny,
-            s.sigma,
-            s.weight,
-            s.sigma_noise,
-            u8::from(s.misfit)
-        )
-        .map_err(err)?;
-    }
-    w.flush().map_err(err)
-}
-
-/// Write `bytes` to `path` through a temporary file in the same folder and
-/// a rename: readers (and a later run) see the old file or the new one,
-/// never a part.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
-    std::fs::write(&tmp, bytes).map_err(fail)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e)
-    })
-}
+/// The samples CSV and atomic writes live in the library, so that the
+/// Python package writes the same files.
+pub use vicurve::io::{write_atomic, write_points_csv};
 
 #[cfg(test)]
 mod tests {

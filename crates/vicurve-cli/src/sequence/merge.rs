@@ -7,11 +7,11 @@
 //! joined in the order of K, which is the order of the frames: the merged
 //! summary is the single run's, byte for byte.
 
-use super::job::{MANIFEST_STEM, SUMMARY_STEM};
-use super::resume::read_fingerprint;
-use super::summary::{header, status, write_summary};
 use crate::failure::Failure;
 use std::path::{Path, PathBuf};
+use vicurve::sequence::run::job::{MANIFEST_STEM, SUMMARY_STEM};
+use vicurve::sequence::run::resume::read_fingerprint;
+use vicurve::sequence::run::summary::{first_cell, header, status, write_summary};
 
 /// One part found in a folder.
 struct Part {
@@ -89,7 +89,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(), Failure> {
         // One entry per frame (rows of a frame are consecutive).
         let mut last: Option<String> = None;
         for line in it.filter(|l| !l.is_empty()) {
-            let frame = super::summary::first_cell(line);
+            let frame = first_cell(line);
             if last.as_deref() != Some(frame.as_str()) {
                 lines.push(Vec::new());
                 last = Some(frame);
@@ -108,7 +108,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(), Failure> {
         summary.display(),
         lines.len()
     );
-    status(&lines, lines.len(), &summary)
+    super::exit_status(status(&lines, lines.len(), &summary))
 }
 
 /// The parts' summaries in `dir`.

@@ -8,10 +8,10 @@
 //! The data are read back from the frames' width CSVs and the summary's
 //! rows, so a resumed run plots the whole sequence.
 
-use super::job::Job;
-use super::summary::{split_csv, COLUMNS};
 use crate::plot::{write_png_with, write_svg_with, Anchor, Canvas};
 use std::path::Path;
+use vicurve::sequence::run::job::Job;
+use vicurve::sequence::run::summary::{split_csv, COLUMNS};
 
 /// Most profiles drawn in one panel.
 pub const MAX_PROFILES: usize = 12;

@@ -14,3 +14,4 @@ mod speed;
 mod stack;
 mod start;
 mod track;
+mod video;

@@ -13,7 +13,7 @@ const FRAMES: usize = 6;
 
 /// Frame `k` of a disc drifting by (0.7, 0.4) px and growing by 0.5 px per
 /// frame: exact coverage, blur 1 px, 1 % noise, 16-bit.
-fn disc(k: usize) -> Image {
+pub fn disc(k: usize) -> Image {
     let t = k as f64;
     render(&RenderSpec {
         width: 160,

@@ -25,8 +25,10 @@ basis_values(degree, n_elements, length, closed, s) -> ndarray
     The engine's uniform B-spline basis, for checks and plots.
 interpolate(image, xs, ys, kind="cubic") -> ndarray
     The engine's image interpolation (cubic B-spline, bilinear, Keys).
-track(frames, init, ...) -> Tracker
+track(frames, init, ..., out_dir=None) -> Tracker
     Track a curve through a sequence; iterate for one TrackedFrame per frame.
+run(job) -> table
+    Run a job file as ``vicurve run job.toml``; returns its summary.
 
 Images are 2-D NumPy arrays (``uint8`` divided by 255, ``uint16`` by 65535,
 ``float32``/``float64`` taken as they are, exactly as image files are read)
@@ -39,7 +41,9 @@ that reached its iteration limit returns with a ``RuntimeWarning``.
 
 Sequences: ``track(frames, init, ...)`` follows a curve through a 3-D array,
 a list of arrays or paths, a glob or a multi-page TIFF, each frame started from
-the previous result as ``vicurve track`` does, yielding one frame at a time.
+the previous result as ``vicurve track`` does, yielding one frame at a time;
+with ``out_dir`` it writes the files of ``vicurve track --out-dir`` and skips
+the frames an earlier run did. ``run("job.toml")`` runs a job file.
 
 Example::
 
@@ -62,6 +66,7 @@ from ._vicurve import (
     eval,
     interpolate,
     measure,
+    run,
     synth,
     track,
 )
@@ -80,6 +85,7 @@ __all__ = [
     "interpolate",
     "measure",
     "measure_all",
+    "run",
     "synth",
     "track",
 ]

@@ -21,6 +21,7 @@ __all__ = [
     "basis_values",
     "interpolate",
     "track",
+    "run",
     "Tracker",
     "TrackedFrame",
 ]
@@ -267,7 +268,8 @@ def interpolate(
 @final
 class TrackedFrame:
     """One frame of ``track``: index, name, input, ok, outcome, reason,
-    started_from and result (None when nothing was measured)."""
+    started_from, result (None when nothing was measured or the frame was
+    resumed) and resumed (done by an earlier run in ``out_dir``)."""
 
     index: int
     name: str
@@ -277,6 +279,7 @@ class TrackedFrame:
     reason: Optional[str]
     started_from: str
     result: Optional[Result]
+    resumed: bool
 
 @final
 class Tracker:
@@ -303,8 +306,21 @@ def track(
     max_iterations: int = 200,
     blur_correction: bool = True,
     levels: str = "varying",
+    out_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+    force: bool = False,
     progress: bool = True,
 ) -> Tracker:
     """Track a curve through ``frames`` (3-D array, arrays or paths, a glob,
     a multi-page TIFF), each frame started from the previous result as
-    ``vicurve track`` does."""
+    ``vicurve track`` does; with ``out_dir``, its files and its resume."""
+
+def run(
+    job: Union[str, "os.PathLike[str]"],
+    *,
+    force: bool = False,
+    shard: Optional[str] = None,
+    progress: bool = True,
+    pandas: bool = True,
+) -> Any:
+    """Run a job file as ``vicurve run job.toml``; returns the summary (a
+    pandas DataFrame, or a dict of NumPy arrays)."""

@@ -15,8 +15,10 @@
 //!
 //! A frame whose fit fails or diverges is recorded, and the next frame
 //! starts from the last good one. [`CurveTracker`] runs the whole loop for
-//! one curve.
+//! one curve; [`run`] runs a job (several curves, widths), with its files
+//! and its resume.
 
+pub mod run;
 mod samplers;
 mod step;
 mod tracker;

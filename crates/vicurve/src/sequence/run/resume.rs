@@ -17,11 +17,11 @@
 //! numbers to the last bit.
 
 use super::job::{CurveSpec, WidthSpec};
+use crate::curve::{SplineCurve, SplineCurveData};
+use crate::fit::{Outcome, TrackSnapshot, TrackState};
+use crate::virtual_image::Profile;
 use serde::Serialize;
 use std::path::Path;
-use vicurve::curve::{SplineCurve, SplineCurveData};
-use vicurve::fit::{Outcome, TrackSnapshot, TrackState};
-use vicurve::virtual_image::Profile;
 
 /// What defines the results of a job, and so its fingerprint: the
 /// curves (start and configurations), tracking and widths; not the list of
@@ -29,9 +29,13 @@ use vicurve::virtual_image::Profile;
 /// optional outputs.
 #[derive(Serialize)]
 pub struct Manifest<'a> {
+    /// The library's version (results may change between versions).
     pub vicurve_version: &'static str,
+    /// [`super::job::Job::track`].
     pub track: bool,
+    /// The curves, their starts and configurations.
     pub curves: &'a [CurveSpec],
+    /// The widths.
     pub widths: &'a [WidthSpec],
 }
 
@@ -53,7 +57,7 @@ impl Manifest<'_> {
     }
 }
 
-pub use vicurve::sequence::{rebuild, tracking_state};
+pub use crate::sequence::{rebuild, tracking_state};
 
 /// A done frame's curve as its JSON records it.
 pub struct Recorded {
@@ -107,7 +111,7 @@ pub fn read_recorded(path: &Path, fingerprint: &str, input: &str) -> Option<Reco
 /// behind (`.NAME.tmp-PID`); files of runs still going (their process
 /// alive) are not told apart, so two runs must not share an output folder.
 ///
-/// [`write_atomic`]: crate::output::write_atomic
+/// [`write_atomic`]: crate::io::write_atomic
 pub fn remove_stale_temporaries(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -130,7 +134,7 @@ pub fn read_fingerprint(path: &Path) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vicurve::curve::InitialCurve;
+    use crate::curve::InitialCurve;
 
     #[test]
     fn curves_survive_the_json_round_trip_exactly() {

@@ -6,12 +6,12 @@
 //! the `min_width` columns. Cells that do not apply are empty. Lengths are
 //! pixels, angles degrees (counterclockwise on screen from `+x`).
 
-use crate::failure::Failure;
-use crate::output::write_atomic;
+use crate::derived::{ClosedMeasures, WidthSample};
+use crate::error::{Error, Result};
+use crate::fit::{Measurement, Outcome};
+use crate::io::write_atomic;
 use std::collections::HashMap;
 use std::path::Path;
-use vicurve::derived::{ClosedMeasures, WidthSample};
-use vicurve::fit::{Measurement, Outcome};
 
 /// The header of `summary.csv`, in order.
 pub const COLUMNS: [&str; 34] = [
@@ -109,7 +109,7 @@ impl Row {
         m: &Measurement,
         started_from: &str,
         note: &str,
-        closed: Result<Option<&ClosedMeasures>, &str>,
+        closed: std::result::Result<Option<&ClosedMeasures>, &str>,
     ) -> Row {
         let (outcome, reason) = match m.outcome {
             Outcome::Converged => ("converged", String::new()),
@@ -254,6 +254,16 @@ pub fn split_csv(line: &str) -> Vec<String> {
     cells
 }
 
+/// The cell of `column` (one of [`COLUMNS`]) in a row's cells
+/// ([`split_csv`]); empty when there is no such column or cell.
+pub fn cell<'a>(cells: &'a [String], column: &str) -> &'a str {
+    COLUMNS
+        .iter()
+        .position(|c| *c == column)
+        .and_then(|i| cells.get(i))
+        .map_or("", String::as_str)
+}
+
 /// The rows of an existing summary by frame, when its header is today's
 /// (else none: every frame is measured again).
 pub fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
@@ -274,19 +284,34 @@ pub fn read_summary(path: &Path) -> HashMap<String, Vec<String>> {
 }
 
 /// Write the summary (atomically): the header, then every frame's rows.
-pub fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<(), Failure> {
+///
+/// Errors: [`Error::Job`] naming the file when it cannot be written.
+pub fn write_summary(path: &Path, lines: &[Vec<String>]) -> Result<()> {
     let mut text = header();
     text.push('\n');
     for l in lines.iter().flatten() {
         text.push_str(l);
         text.push('\n');
     }
-    Ok(write_atomic(path, text.as_bytes())?)
+    write_atomic(path, text.as_bytes()).map_err(Error::job)
 }
 
-/// The sequence's exit status, from the `outcome` column of its rows:
-/// frames that failed are exit 3 (or 1 when none could be measured).
-pub fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> Result<(), Failure> {
+/// How a sequence ended, from the `outcome` column of its rows (the
+/// command line's exit status: 0, 3 and 1).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RunStatus {
+    /// Every frame measured.
+    Complete,
+    /// Some frames failed, the others are measured: how many and the
+    /// first reason, in one line naming the summary.
+    SomeFailed(String),
+    /// No frame could be measured at all: the first reason, in one line.
+    NoneMeasured(String),
+}
+
+/// The sequence's status, from the `outcome` column of its rows: frames
+/// that failed or diverged, of `total`.
+pub fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> RunStatus {
     let outcome = COLUMNS.iter().position(|c| *c == "outcome").unwrap_or(2);
     let reason = COLUMNS.iter().position(|c| *c == "reason").unwrap_or(3);
     let mut failed_frames = 0;
@@ -314,17 +339,17 @@ pub fn status(lines: &[Vec<String>], total: usize, summary: &Path) -> Result<(),
         failed_frames += usize::from(failed);
     }
     match (failed_frames, good_rows) {
-        (0, _) => Ok(()),
-        (_, 0) => Err(Failure::Error(format!(
+        (0, _) => RunStatus::Complete,
+        (_, 0) => RunStatus::NoneMeasured(format!(
             "no frame could be measured ({}); see {}",
             first.unwrap_or_default(),
             summary.display()
-        ))),
-        (n, _) => Err(Failure::Diverged(format!(
+        )),
+        (n, _) => RunStatus::SomeFailed(format!(
             "{n} of {total} frames failed (first: {}); the others are measured, see {}",
             first.unwrap_or_default(),
             summary.display()
-        ))),
+        )),
     }
 }
 

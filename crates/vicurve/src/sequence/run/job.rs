@@ -38,7 +38,7 @@
 //! stages unless a curve says otherwise (`track_stages`). When those are
 //! the default schedule (no `stages`, no `track_stages`), a silhouette's
 //! tracked frames run the *tracking schedule*
-//! ([`vicurve::fit::measure_tracked_from`]): the pixel-edge stage alone,
+//! ([`crate::fit::measure_tracked_from`]): the pixel-edge stage alone,
 //! from the previous frame's blur and elements, on the image without
 //! interpolation; a frame it cannot measure (the previous one did not end
 //! with a pixel-edge stage, or the stage fails) gets the whole default
@@ -49,12 +49,13 @@
 //! accurate (docs/benchmarks.md, "Sequences").
 
 use super::frames::{frames, Frame};
-use crate::args::CurveArgs;
-use crate::failure::{one_line, Failure};
+use super::one_line;
+use super::options::CurveOptions;
+use crate::curve::InitialCurve;
+use crate::error::{Error, Result};
+use crate::fit::FitConfig;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use vicurve::curve::InitialCurve;
-use vicurve::fit::FitConfig;
 
 /// `DIR/summary.csv`.
 pub const SUMMARY_STEM: &str = "summary";
@@ -89,7 +90,7 @@ enum Images {
 }
 
 /// One curve as written in a job file: `name`, `init`, `track_stages`,
-/// and the keys of [`CurveArgs`] (the flags of `measure` and `track`).
+/// and the keys of [`CurveOptions`] (the flags of `measure` and `track`).
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct CurveFile {
@@ -111,9 +112,9 @@ struct CurveFile {
 
 impl CurveFile {
     /// The curve's options: the flags' defaults for the keys left out.
-    fn args(&self) -> CurveArgs {
-        let d = CurveArgs::default();
-        CurveArgs {
+    fn args(&self) -> CurveOptions {
+        let d = CurveOptions::default();
+        CurveOptions {
             closed: self.closed,
             kind: self.kind.clone().unwrap_or(d.kind),
             polarity: self.polarity.clone().unwrap_or(d.polarity),
@@ -169,12 +170,16 @@ impl Default for OutputsFile {
 pub struct Job {
     /// The frames, in order (the pages of a stack one by one).
     pub images: Vec<Frame>,
+    /// The output folder: per-frame files, the summary, the manifest.
     pub out_dir: PathBuf,
     /// Start each frame from the previous frame's result (else every frame
     /// from the curves' `init`).
     pub track: bool,
+    /// The curves measured on every frame (at least one).
     pub curves: Vec<CurveSpec>,
+    /// The widths derived between two of them.
     pub widths: Vec<WidthSpec>,
+    /// The optional outputs.
     pub outputs: JobOutputs,
     /// The part of a larger job these frames are (`run --shard K/N`).
     pub shard: Option<Shard>,
@@ -184,8 +189,11 @@ pub struct Job {
 /// `first` of the whole job's (`run --shard K/N`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
+    /// K, from 1.
     pub index: usize,
+    /// N.
     pub count: usize,
+    /// The whole job's index of the part's first frame.
     pub first: usize,
 }
 
@@ -197,9 +205,9 @@ impl Shard {
 }
 
 /// `K/N` with `1 <= K <= N`.
-pub fn parse_shard(text: &str) -> Result<(usize, usize), Failure> {
+pub fn parse_shard(text: &str) -> Result<(usize, usize)> {
     let bad = || {
-        Failure::Error(format!(
+        Error::job(format!(
             "--shard '{text}': expected K/N with 1 <= K <= N, such as 3/10"
         ))
     };
@@ -219,10 +227,10 @@ pub fn parse_shard(text: &str) -> Result<(usize, usize), Failure> {
 /// is one sequence, each frame started from the one before: it cannot be
 /// split without changing its results, so it is one part (split a
 /// campaign of sequences by giving each its own job file).
-pub fn shard(job: &mut Job, k: usize, n: usize) -> Result<(), Failure> {
+pub fn shard(job: &mut Job, k: usize, n: usize) -> Result<()> {
     if job.track && n > 1 {
-        return Err(Failure::Error(
-            "--shard: a tracked job is one sequence (each frame starts from the one before) and cannot be split; give each sequence its own job file, or set track = false for independent frames".into(),
+        return Err(Error::job(
+            "--shard: a tracked job is one sequence (each frame starts from the one before) and cannot be split; give each sequence its own job file, or set track = false for independent frames",
         ));
     }
     let total = job.images.len();
@@ -239,6 +247,7 @@ pub fn shard(job: &mut Job, k: usize, n: usize) -> Result<(), Failure> {
 /// One curve to measure on every frame.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct CurveSpec {
+    /// Names its files when a job has several curves.
     pub name: String,
     /// The start of the first frame (and of frames after a failure with no
     /// good curve before them).
@@ -254,8 +263,8 @@ pub struct CurveSpec {
 
 impl CurveSpec {
     /// The curve as the library's sequence step takes it.
-    pub fn as_sequence(&self) -> vicurve::sequence::SequenceCurve<'_> {
-        vicurve::sequence::SequenceCurve {
+    pub fn as_sequence(&self) -> crate::sequence::SequenceCurve<'_> {
+        crate::sequence::SequenceCurve {
             init: &self.init,
             first: &self.first,
             tracked: &self.tracked,
@@ -268,13 +277,17 @@ impl CurveSpec {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AxisChoice {
+    /// The image's x axis (positions are x).
     X,
+    /// The image's y axis.
     Y,
     /// Estimated on each frame from the two curves.
     Estimate,
     /// Origin and direction, px.
     Explicit {
+        /// A point of the axis, px.
         origin: [f64; 2],
+        /// Its direction (any length but zero).
         direction: [f64; 2],
     },
 }
@@ -282,38 +295,50 @@ pub enum AxisChoice {
 /// A width between two named curves.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct WidthSpec {
+    /// Names its files and summary rows.
     pub name: String,
     /// Indices into `Job::curves`.
     pub between: [usize; 2],
+    /// The axis the profile's positions run along.
     pub axis: AxisChoice,
+    /// Spacing of the profile's positions, px.
     pub step: f64,
 }
 
 /// Overlay format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OverlayKind {
+    /// A PNG image.
     Png,
+    /// An SVG drawing over the image.
     Svg,
 }
 
 #[derive(Debug, Clone)]
+/// The optional outputs of a job.
 pub struct JobOutputs {
+    /// A points CSV per frame and curve.
     pub points: bool,
+    /// An overlay per frame.
     pub overlay: Option<OverlayKind>,
+    /// The width plots (drawn by the command-line tool).
     pub plots: bool,
 }
 
 /// Read and check a job file.
-pub fn load(path: &Path) -> Result<Job, Failure> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::NotFound {
-            format!("job file not found: {}", path.display())
-        } else {
-            format!("cannot read the job file {}: {e}", path.display())
-        }
-    })?;
+pub fn load(path: &Path) -> Result<Job> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                format!("job file not found: {}", path.display())
+            } else {
+                format!("cannot read the job file {}: {e}", path.display())
+            }
+        })
+        .map_err(Error::job)?;
     let file: JobFile = toml::from_str(&text)
-        .map_err(|e| format!("job file {}: {}", path.display(), one_line(&e.to_string())))?;
+        .map_err(|e| format!("job file {}: {}", path.display(), one_line(&e.to_string())))
+        .map_err(Error::job)?;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let images = match &file.images {
         Images::Glob(pattern) => expand_glob(&resolve(&base, pattern))?,
@@ -332,12 +357,12 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
             };
             curve_spec(name, &init, &c.args(), c.track_stages.as_deref())
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>>>()?;
     let widths = file
         .width
         .iter()
         .map(|w| width_spec(w, &curves))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>>>()?;
     let overlay = match file.outputs.overlay.as_deref() {
         None | Some("none") => None,
         Some(o) => Some(parse_overlay(o)?),
@@ -360,11 +385,11 @@ pub fn load(path: &Path) -> Result<Job, Failure> {
 }
 
 /// `png` or `svg`.
-pub fn parse_overlay(text: &str) -> Result<OverlayKind, Failure> {
+pub fn parse_overlay(text: &str) -> Result<OverlayKind> {
     match text {
         "png" => Ok(OverlayKind::Png),
         "svg" => Ok(OverlayKind::Svg),
-        _ => Err(Failure::Error(format!(
+        _ => Err(Error::job(format!(
             "unknown overlay '{text}' (expected png, svg or none)"
         ))),
     }
@@ -382,14 +407,14 @@ fn resolve(base: &Path, pattern: &str) -> String {
 /// The files matching a glob pattern, sorted by name (`*`, `?`, `[...]`;
 /// see the `glob` crate). No match is an error: a misspelt pattern should
 /// not look like an empty sequence.
-pub fn expand_glob(pattern: &str) -> Result<Vec<PathBuf>, Failure> {
+pub fn expand_glob(pattern: &str) -> Result<Vec<PathBuf>> {
     let paths = glob::glob(pattern)
-        .map_err(|e| format!("bad image pattern '{pattern}': {e}"))?
+        .map_err(|e| Error::job(format!("bad image pattern '{pattern}': {e}")))?
         .filter_map(|entry| entry.ok())
         .filter(|p| p.is_file())
         .collect::<Vec<_>>();
     if paths.is_empty() {
-        return Err(Failure::Error(format!(
+        return Err(Error::job(format!(
             "no image matches '{pattern}' (quote the pattern so that the shell does not expand it)"
         )));
     }
@@ -406,15 +431,15 @@ pub fn expand_glob(pattern: &str) -> Result<Vec<PathBuf>, Failure> {
 pub fn curve_spec(
     name: String,
     init: &str,
-    args: &CurveArgs,
+    args: &CurveOptions,
     track_stages: Option<&str>,
-) -> Result<CurveSpec, Failure> {
-    let context = |e: Failure| Failure::Error(format!("curve '{name}': {}", e.message()));
+) -> Result<CurveSpec> {
+    let context = |e: Error| Error::job(format!("curve '{name}': {e}"));
     let init = args.init(init).map_err(context)?;
     let first = args.config().map_err(context)?;
-    first.validate().map_err(|e| context(e.into()))?;
+    first.validate().map_err(context)?;
     let (tracked, tracking_schedule) =
-        vicurve::sequence::tracked_config(&first, track_stages).map_err(|e| context(e.into()))?;
+        crate::sequence::tracked_config(&first, track_stages).map_err(context)?;
     Ok(CurveSpec {
         name,
         init,
@@ -424,11 +449,11 @@ pub fn curve_spec(
     })
 }
 
-fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure> {
+fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec> {
     let name = w.name.clone().unwrap_or_else(|| "width".into());
     let find = |n: &str| {
         curves.iter().position(|c| c.name == n).ok_or_else(|| {
-            Failure::Error(format!(
+            Error::job(format!(
                 "width '{name}': no curve named '{n}' (the curves are: {})",
                 curves
                     .iter()
@@ -440,13 +465,13 @@ fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure>
     };
     let between = [find(&w.between[0])?, find(&w.between[1])?];
     if between[0] == between[1] {
-        return Err(Failure::Error(format!(
+        return Err(Error::job(format!(
             "width '{name}': the two curves must differ"
         )));
     }
     for &i in &between {
         if curves[i].init.is_closed() {
-            return Err(Failure::Error(format!(
+            return Err(Error::job(format!(
                 "width '{name}': curve '{}' is closed; a width is measured between two open curves",
                 curves[i].name
             )));
@@ -459,14 +484,14 @@ fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure>
             "y" => AxisChoice::Y,
             "estimate" => AxisChoice::Estimate,
             _ => {
-                return Err(Failure::Error(format!(
+                return Err(Error::job(format!(
                     "width '{name}': unknown axis '{a}' (expected \"x\", \"y\", \"estimate\" or [x0, y0, dx, dy])"
                 )));
             }
         },
         Some(AxisFile::Explicit(v)) => {
             if !v.iter().all(|x| x.is_finite()) || v[2].hypot(v[3]) == 0.0 {
-                return Err(Failure::Error(format!(
+                return Err(Error::job(format!(
                     "width '{name}': the axis [x0, y0, dx, dy] needs finite numbers and a non-zero direction"
                 )));
             }
@@ -478,7 +503,7 @@ fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure>
     };
     let step = w.step.unwrap_or(1.0);
     if !(step.is_finite() && step > 0.0) {
-        return Err(Failure::Error(format!(
+        return Err(Error::job(format!(
             "width '{name}': step {step} px (must be > 0)"
         )));
     }
@@ -492,14 +517,14 @@ fn width_spec(w: &WidthFile, curves: &[CurveSpec]) -> Result<WidthSpec, Failure>
 
 /// Names are unique, usable in file names, and frames have distinct stems
 /// that do not collide with the job's own files.
-pub fn check(job: &Job) -> Result<(), Failure> {
+pub fn check(job: &Job) -> Result<()> {
     if job.curves.is_empty() {
-        return Err(Failure::Error(
-            "the job measures no curve: add a [[curve]] table with at least `init`".into(),
+        return Err(Error::job(
+            "the job measures no curve: add a [[curve]] table with at least `init`",
         ));
     }
     if job.images.is_empty() {
-        return Err(Failure::Error("the job lists no image".into()));
+        return Err(Error::job("the job lists no image"));
     }
     let mut names: Vec<&str> = Vec::new();
     for n in job
@@ -512,12 +537,12 @@ pub fn check(job: &Job) -> Result<(), Failure> {
             && n.chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
         if !ok {
-            return Err(Failure::Error(format!(
+            return Err(Error::job(format!(
                 "name '{n}': use letters, digits, '-' and '_' only (it names files)"
             )));
         }
         if names.contains(&n) {
-            return Err(Failure::Error(format!(
+            return Err(Error::job(format!(
                 "name '{n}' is used twice (curves and widths need distinct names)"
             )));
         }
@@ -527,13 +552,13 @@ pub fn check(job: &Job) -> Result<(), Failure> {
     for f in &job.images {
         let stem = &f.stem;
         if stem == SUMMARY_STEM || stem == MANIFEST_STEM {
-            return Err(Failure::Error(format!(
+            return Err(Error::job(format!(
                 "frame {}: the name '{stem}' is reserved for the job's own files; rename the image",
                 f.input()
             )));
         }
         if !seen.insert(stem.as_str()) {
-            return Err(Failure::Error(format!(
+            return Err(Error::job(format!(
                 "two frames are named '{stem}' (results are named after the file stem): {}",
                 f.input()
             )));

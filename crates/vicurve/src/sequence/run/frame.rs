@@ -13,26 +13,25 @@
 //!   the axis, width and its standard deviation, px);
 //! - `STEM.overlay.png` or `.svg` on request.
 
-use super::frames::Frame;
 use super::job::{AxisChoice, Job, OverlayKind};
 use super::resume::{rebuild, tracking_state};
 use super::summary::Row;
-use crate::output::measurement::overlay_layers;
-use crate::output::overlay;
-use crate::output::{write_atomic, write_points_csv, ResultFile};
+use crate::curve::SplineCurve;
+use crate::derived::{width_profile, WidthAxis};
+use crate::fit::{Measurement, Outcome, TrackCache, TrackSnapshot, TrackState};
+use crate::interp::Interpolation;
+use crate::io::write::temporary_name;
+use crate::io::{write_atomic, write_points_csv};
+use crate::report::ResultFile;
+use crate::sequence::{measure_curve, CurveStep, FrameSamplers};
+use crate::Image;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use vicurve::curve::SplineCurve;
-use vicurve::derived::{width_profile, WidthAxis};
-use vicurve::fit::{Measurement, Outcome, TrackCache, TrackSnapshot, TrackState};
-use vicurve::interp::Interpolation;
-use vicurve::sequence::{measure_curve, CurveStep, FrameSamplers};
-use vicurve::Image;
 
-pub use vicurve::sequence::Previous;
+pub use crate::sequence::Previous;
 
 /// The state a sequence carries from frame to frame.
 pub struct Tracking {
@@ -50,6 +49,7 @@ pub struct Tracking {
 }
 
 impl Tracking {
+    /// Nothing carried yet: the axes given by the job fixed.
     pub fn new(job: &Job) -> Tracking {
         Tracking {
             last_good: vec![None; job.curves.len()],
@@ -120,12 +120,15 @@ impl Tracking {
 
 /// File names of a frame's results.
 pub struct FrameFiles {
+    /// The job's output folder.
     pub dir: PathBuf,
+    /// The frame's name.
     pub stem: String,
     several: bool,
 }
 
 impl FrameFiles {
+    /// The files of frame `stem` of `job`.
     pub fn new(job: &Job, stem: &str) -> FrameFiles {
         FrameFiles {
             dir: job.out_dir.clone(),
@@ -161,7 +164,8 @@ impl FrameFiles {
         self.named(name, "csv")
     }
 
-    fn overlay(&self, kind: OverlayKind) -> PathBuf {
+    /// The overlay of the frame.
+    pub fn overlay(&self, kind: OverlayKind) -> PathBuf {
         self.named(
             "overlay",
             match kind {
@@ -188,7 +192,7 @@ struct SequenceInfo<'a> {
     #[serde(skip_serializing_if = "str::is_empty")]
     note: &'a str,
     /// The band the fit leaves for the next frame (see
-    /// [`vicurve::fit::TrackCache`]), so that a resumed run reuses it as an
+    /// [`crate::fit::TrackCache`]), so that a resumed run reuses it as an
     /// uninterrupted one does.
     #[serde(skip_serializing_if = "Option::is_none")]
     track_band: Option<&'a TrackSnapshot>,
@@ -202,8 +206,18 @@ struct FrameRecord<'a> {
     sequence: SequenceInfo<'a>,
 }
 
+/// Draws a frame's overlay (the command line's drawing; the library has
+/// none): the format, the file to write, the frame and its curves' fits
+/// (in the job's order). The error, one line, is logged as a problem of
+/// the frame.
+pub type OverlayWriter =
+    dyn Fn(OverlayKind, &Path, &Image, &[CurveStep]) -> Result<(), String> + Sync;
+
 /// What a frame produced.
 pub struct FrameOutput {
+    /// Each curve's fit, its start and configuration (per curve of the
+    /// job; empty when the frame could not be decoded).
+    pub steps: Vec<CurveStep>,
     /// Its summary rows (curves, then widths).
     pub rows: Vec<Row>,
     /// The good curves as written (per curve of the job).
@@ -216,22 +230,24 @@ pub struct FrameOutput {
     pub problems: Vec<String>,
 }
 
-/// Measure frame `index` (`frame`, decoded by [`Frame::decode`] into
-/// `decoded`; results named `files.stem`).
+/// Measure frame `index` (recorded as `input`, decoded into `decoded`;
+/// results named `files.stem`), its overlay drawn by `overlay` when the
+/// job asks for one.
 pub fn measure_frame(
     job: &Job,
     fingerprint: &str,
-    index: usize,
-    (frame, decoded): (&Frame, Result<Image, String>),
+    (index, input): (usize, &str),
+    decoded: Result<Image, String>,
     files: &FrameFiles,
     tracking: &Tracking,
+    overlay: Option<&OverlayWriter>,
 ) -> FrameOutput {
     let stem = files.stem.as_str();
     let image = match decoded {
         Ok(i) => i,
         Err(e) => return unreadable(job, stem, &e),
     };
-    let path_text = frame.input();
+    let path_text = input;
     let samplers = FrameSamplers::new(&image);
     let sampler = |k: Interpolation| samplers.get(k);
     // Curves are independent: measure them in parallel (each fit also
@@ -266,7 +282,7 @@ pub fn measure_frame(
         };
         let record = FrameRecord {
             result: ResultFile::new(
-                &path_text,
+                path_text,
                 (image.width(), image.height()),
                 &r.init,
                 &r.config,
@@ -372,11 +388,16 @@ pub fn measure_frame(
     }
 
     if let Some(kind) = job.outputs.overlay {
-        if let Err(e) = write_overlay(kind, files, &image, &results) {
+        let drawn = match overlay {
+            Some(draw) => draw(kind, &files.overlay(kind), &image, &results),
+            None => Err("not drawn (overlays are drawn by the command-line tool)".into()),
+        };
+        if let Err(e) = drawn {
             problems.push(format!("{stem}: overlay: {e}"));
         }
     }
     FrameOutput {
+        steps: results,
         rows,
         good,
         states,
@@ -395,6 +416,7 @@ fn unreadable(job: &Job, stem: &str, reason: &str) -> FrameOutput {
         .map(|n| Row::new(stem, n).failed("failed", reason))
         .collect();
     FrameOutput {
+        steps: Vec::new(),
         rows,
         good: vec![None; job.curves.len()],
         states: vec![None; job.curves.len()],
@@ -417,35 +439,10 @@ fn write_curve_files(
     if job.outputs.points {
         // The points first: the JSON is what marks the curve done.
         let target = files.points(name);
-        let tmp = target.with_file_name(format!(
-            ".{}.tmp-{}",
-            target.file_name().unwrap_or_default().to_string_lossy(),
-            std::process::id()
-        ));
+        let tmp = temporary_name(&target);
         write_points_csv(&tmp, m)?;
         std::fs::rename(&tmp, &target)
             .map_err(|e| format!("cannot write {}: {e}", target.display()))?;
     }
     write_atomic(&files.json(name), text.as_bytes())
-}
-
-/// Every curve of the frame over the image.
-fn write_overlay(
-    kind: OverlayKind,
-    files: &FrameFiles,
-    image: &Image,
-    results: &[CurveStep],
-) -> Result<(), String> {
-    let mut layers = Vec::new();
-    for r in results {
-        if let Ok(m) = &r.measured {
-            let l = overlay_layers(&r.init, &r.config, m).map_err(|e| e.message())?;
-            layers.extend(l);
-        }
-    }
-    let path = files.overlay(kind);
-    match kind {
-        OverlayKind::Png => overlay::write_png(&path, image, &layers, 1),
-        OverlayKind::Svg => overlay::write_svg(&path, image, &layers),
-    }
 }
