@@ -25,6 +25,11 @@ pub struct AllArgs {
     /// --roi), as open curves along their visible edge.
     #[arg(long)]
     pub include_border: bool,
+    /// With --all: also measure the holes inside the objects, as objects of
+    /// the opposite polarity (numbered after the objects; the table's
+    /// `parent` column gives the object each is in).
+    #[arg(long)]
+    pub holes: bool,
     /// With --all: write one row per object as CSV (id, outcome, centroid,
     /// area, equivalent diameter, circle and ellipse with sigmas, model
     /// parameters with sigmas, RMS residual, message).
@@ -39,10 +44,12 @@ impl AllArgs {
             && (self.min_length.is_some()
                 || self.min_area.is_some()
                 || self.include_border
+                || self.holes
                 || self.table.is_some())
         {
             return Err(Failure::Error(
-                "--min-length, --min-area, --include-border and --table go with --all".into(),
+                "--min-length, --min-area, --include-border, --holes and --table go with --all"
+                    .into(),
             ));
         }
         Ok(())

@@ -25,6 +25,7 @@ pub fn config(args: &Args) -> Result<AllConfig, Failure> {
         min_area: args.all.min_area,
         roi: args.start.automatic()?.roi,
         include_border: args.all.include_border,
+        holes: args.all.holes,
         model: args.model,
         fit,
         ..AllConfig::default()

@@ -174,3 +174,18 @@ fn all_options_are_checked() {
     let out = vicurve(&["measure", "x.png", "--all", "--init", "circle:1,2,3"]);
     assert_error(&out, 1, "drop --init");
 }
+
+/// `synth grid --size` makes an image of that size (the grid spread over
+/// it), and refuses one too small for the circles.
+#[test]
+fn synth_grid_honours_the_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = p(dir.path(), "grid.png");
+    ok(&vicurve(&[
+        "synth", "grid", "--size", "900x800", "--out", &img,
+    ]));
+    let image = vicurve::io::load_image(img.as_ref()).unwrap();
+    assert_eq!((image.width(), image.height()), (900, 800));
+    let out = vicurve(&["synth", "grid", "--size", "300x300", "--out", &img]);
+    assert_error(&out, 1, "a larger image or smaller circles");
+}

@@ -6,9 +6,11 @@ use super::{AllConfig, ObjectFailure, ObjectResult};
 use crate::curve::InitialCurve;
 use crate::derived::closed_measures;
 use crate::fit::{
-    default_stages, measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage,
+    breaks, default_stages, measure_from, Elements, FitConfig, Measurement, Outcome, Polarity,
+    Stage,
 };
 use crate::image::Image;
+use crate::interp::Sampler;
 use crate::model::measure_model;
 use crate::start::{free_run, smooth, MIN_BOUNDARY};
 
@@ -22,9 +24,15 @@ const BAND_MARGIN: f64 = 3.0;
 /// contrast, whichever is larger) this many times does not fit.
 const MISFIT_RATIO: f64 = 2.0;
 
-/// Measure `c` (module docs of [`super`]); never fails: a failure is
-/// recorded in the result.
-pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> ObjectResult {
+/// Measure `c` (module docs of [`super`]) in `image`, prepared once for
+/// every object as `sampler` (of `config.fit.interpolation`); never fails:
+/// a failure is recorded in the result.
+pub(crate) fn measure_one(
+    image: &Image,
+    sampler: &Sampler,
+    c: &Candidate,
+    config: &AllConfig,
+) -> ObjectResult {
     let mut out = ObjectResult {
         id: c.id,
         region: c.region.clone(),
@@ -51,7 +59,9 @@ pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> O
         }
     };
     out.config = fit.clone();
-    let m = match measure(image, &start, &fit) {
+    let m = match breaks::initial_curve(&start, &fit.breaks)
+        .and_then(|reference| measure_from(sampler, reference, &fit))
+    {
         Ok(m) => m,
         Err(e) => {
             out.failure = Some(ObjectFailure::Measure {
@@ -169,12 +179,12 @@ fn capped_config(
 }
 
 /// A diverged fit, or a closed curve whose area is far from its region's
-/// (more than one pixel all round: it ran to another edge).
+/// with its holes (more than one pixel all round: it ran to another edge).
 fn check_curve(c: &Candidate, m: &Measurement) -> Option<ObjectFailure> {
     if let Outcome::Diverged { divergence } = m.outcome {
         return Some(ObjectFailure::Diverged { divergence });
     }
-    let region = c.region.pixels as f64;
+    let region = (c.region.pixels + c.enclosed) as f64;
     match m.area() {
         Some(a) if (a.abs() - region).abs() > c.region.boundary as f64 => {
             Some(ObjectFailure::Wandered {

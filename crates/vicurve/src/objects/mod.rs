@@ -10,12 +10,16 @@
 //!    contrasted enough (mean edge gradient at least
 //!    [`MIN_CONTRAST_TO_NOISE`] times the image noise). Regions cut by the
 //!    rectangle's border are skipped unless [`AllConfig::include_border`].
+//!    With [`AllConfig::holes`], the regions of the other phase inside an
+//!    object that pass the same tests are objects too, of the opposite
+//!    polarity (numbered after the objects, each with its `parent`).
 //! 2. [`order`]: objects are numbered row-major by centroid (rows grouped
 //!    by half the median object size), so that two images of the same
 //!    scene number them alike.
 //! 3. [`measure_one`](measure): each object's band is kept off its
 //!    neighbours (the stages' half-widths are capped by the gap to the
-//!    nearest other region); an object too close to another to be
+//!    nearest other edge: another region of its phase, or one inside it);
+//!    an object too close to another to be
 //!    measured, a fit that diverges, loops or runs away from its region,
 //!    or a shape model that does not fit, is recorded as failed with its
 //!    reason ([`ObjectFailure`]); the other objects are unaffected.
@@ -49,6 +53,7 @@ use crate::derived::ClosedMeasures;
 use crate::error::{Error, Result};
 use crate::fit::{Divergence, FitConfig, Measurement};
 use crate::image::Image;
+use crate::interp::Sampler;
 use crate::model::{ModelConfig, ModelFit, ShapeModel};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -121,6 +126,11 @@ pub struct AllConfig {
     /// Measure objects cut by the rectangle's border, as open curves along
     /// their visible edge. Default: false (they are skipped).
     pub include_border: bool,
+    /// Also measure the holes inside the objects, as objects of the
+    /// opposite polarity (regions of the other phase enclosed by an object,
+    /// with the same least length, area and contrast), numbered after the
+    /// objects. Default: false.
+    pub holes: bool,
     /// The shape model fitted to every object. Default: none.
     pub model: Option<ShapeModel>,
     /// The B-spline measurement's settings (its stages are capped per
@@ -138,6 +148,7 @@ impl Default for AllConfig {
             min_area: None,
             roi: None,
             include_border: false,
+            holes: false,
             model: None,
             fit: FitConfig::default(),
             model_config: ModelConfig::default(),
@@ -206,7 +217,7 @@ pub enum ObjectFailure {
     Wandered {
         /// Area inside the measured curve, px^2.
         measured: f64,
-        /// Pixels of the thresholded region.
+        /// Pixels of the thresholded region and of its holes.
         region: f64,
     },
     /// The shape model could not be fitted.
@@ -239,9 +250,12 @@ pub struct RegionInfo {
     pub bbox: [usize; 4],
     /// Whether it is cut by the search rectangle's border.
     pub touches_border: bool,
-    /// Gap to the nearest other region of the same phase, px (infinite
-    /// beyond the search reach).
+    /// Gap to the nearest other edge (a region of the same phase, or one
+    /// inside this one), px (infinite beyond the search reach).
     pub gap: f64,
+    /// For a hole: the id of the object it is inside.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<usize>,
 }
 
 /// One object: where it was found, its start, and its measurement or why
@@ -303,10 +317,12 @@ impl AllResult {
 pub fn measure_all(image: &Image, config: &AllConfig) -> Result<AllResult> {
     config.validate()?;
     let found = find::find_objects(image, config)?;
+    // The image's interpolant, prepared once for every object.
+    let sampler = Sampler::new(image, config.fit.interpolation);
     let objects = found
         .candidates
         .par_iter()
-        .map(|c| measure::measure_one(image, c, config))
+        .map(|c| measure::measure_one(image, &sampler, c, config))
         .collect();
     Ok(AllResult { objects, found })
 }

@@ -3,4 +3,5 @@
 //! reason.
 
 mod grid;
+mod holes;
 mod scene;
