@@ -43,8 +43,8 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Write the forming-limit scatter (eps2 horizontal, eps1 vertical,
-    /// two-sigma error bars) as SVG.
-    #[arg(long, value_name = "FILE.svg")]
+    /// two-sigma error bars): PNG when FILE ends in .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub fld: Option<PathBuf>,
 }
 
@@ -122,7 +122,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if let Some(p) = &args.fld {
         let measured: Vec<&GridStrain> = strains.iter().flatten().collect();
         let title = format!("{input}: {} circles, D0 = {d0:.2} px", measured.len());
-        if let Err(e) = crate::plot::fld::write_fld_svg(p, &measured, &title) {
+        if let Err(e) = crate::plot::fld::write_fld(p, &measured, &title) {
             first.get_or_insert(e);
         }
     }
@@ -139,20 +139,33 @@ pub fn run(args: Args) -> Result<(), Failure> {
 fn print_strains(strains: &[Option<GridStrain>]) {
     println!("id  x  y  eps1 +- s  eps2 +- s  eps3 +- s  angle_deg");
     for s in strains.iter().flatten() {
+        let e = strain_values(s);
         println!(
             "{} {:.3} {:.3} {:.5} {:.1e} {:.5} {:.1e} {:.5} {:.1e} {:.2}",
             s.id,
             s.centre[0],
             s.centre[1],
-            s.eps1,
-            s.sigma_eps1,
-            s.eps2,
-            s.sigma_eps2,
-            s.eps3,
-            s.sigma_eps3,
+            e[0],
+            e[1],
+            e[2],
+            e[3],
+            e[4],
+            e[5],
             s.angle.to_degrees()
         );
     }
+}
+
+/// `eps1, sigma_eps1, eps2, sigma_eps2, eps3, sigma_eps3` of `s`.
+fn strain_values(s: &GridStrain) -> [f64; 6] {
+    [
+        s.eps1,
+        s.sigma_eps1,
+        s.eps2,
+        s.sigma_eps2,
+        s.eps3,
+        s.sigma_eps3,
+    ]
 }
 
 /// The strain table (`--table`), one row per measured circle.
@@ -175,18 +188,9 @@ fn write_table(
         if let Some(k) = scale {
             v.extend([s.centre[0] * k, s.centre[1] * k]);
         }
-        v.extend([
-            s.a,
-            s.b,
-            s.eps1,
-            s.sigma_eps1,
-            s.eps2,
-            s.sigma_eps2,
-            s.eps3,
-            s.sigma_eps3,
-            s.angle.to_degrees(),
-            s.sigma_angle.to_degrees(),
-        ]);
+        v.extend([s.a, s.b]);
+        v.extend(strain_values(s));
+        v.extend([s.angle.to_degrees(), s.sigma_angle.to_degrees()]);
         let text: Vec<String> = v.into_iter().map(format_value).collect();
         writeln!(w, "{},{}", s.id, text.join(",")).map_err(err)?;
     }

@@ -35,13 +35,9 @@ pub fn config(args: &Args) -> Result<AllConfig, Failure> {
 pub fn run(args: Args) -> Result<(), Failure> {
     let config = config(&args)?;
     config.validate()?;
-    if args.diagnostics.is_some()
-        || args.cad.any()
-        || args.outputs.svg.is_some()
-        || args.outputs.png.is_some()
-    {
+    if args.diagnostics.is_some() || args.cad.any() {
         return Err(Failure::Error(
-            "--all writes --out, --points and --table; --svg, --png, --diagnostics and the CAD files are for one curve".into(),
+            "--all writes --out, --points, --table, --svg and --png; --diagnostics and the CAD files are for one curve".into(),
         ));
     }
     let image = vicurve::io::load_image(&args.image)?;
@@ -51,9 +47,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         &all,
         &config,
         &input,
-        (image.width(), image.height()),
-        args.outputs.out.as_deref(),
-        args.outputs.points.as_deref(),
+        &image,
+        &args.outputs,
         args.all.table.as_deref(),
     )?;
     summary(&all);

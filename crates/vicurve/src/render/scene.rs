@@ -248,7 +248,19 @@ pub fn random_scene(
             )
         })?;
     }
-    Ok(Scene {
+    Ok(scene_of(width, height, items, seed, None))
+}
+
+/// A scene of `items` with the default rendering: 0.8 on 0.2, blur 1 px,
+/// noise 1 % of the contrast, 8 bits.
+fn scene_of(
+    width: usize,
+    height: usize,
+    items: Vec<SceneItem>,
+    seed: u64,
+    d0: Option<f64>,
+) -> Scene {
+    Scene {
         width,
         height,
         items,
@@ -258,8 +270,8 @@ pub fn random_scene(
         noise: 0.01,
         seed,
         bits: Some(8),
-        d0: None,
-    })
+        d0,
+    }
 }
 
 /// Largest principal stretch of [`strained_grid`]'s field.
@@ -383,16 +395,5 @@ fn grid_scene(width: usize, height: usize, g: &GridLayout, seed: u64) -> Scene {
             });
         }
     }
-    Scene {
-        width,
-        height,
-        items,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed,
-        bits: Some(8),
-        d0: Some(g.d0),
-    }
+    scene_of(width, height, items, seed, Some(g.d0))
 }
