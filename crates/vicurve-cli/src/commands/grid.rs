@@ -46,6 +46,12 @@ pub struct Args {
     /// two-sigma error bars): PNG when FILE ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub fld: Option<PathBuf>,
+    /// Write the strain map: every measured circle over the image in a
+    /// colour by eps1 (six bins, blue lowest to red highest; the SVG's
+    /// legend gives their ranges), with its id: PNG when FILE ends in
+    /// .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub map: Option<PathBuf>,
 }
 
 /// The JSON of `grid --out`.
@@ -126,8 +132,14 @@ pub fn run(args: Args) -> Result<(), Failure> {
             first.get_or_insert(e);
         }
     }
+    if let Some(p) = &args.map {
+        let drawn = crate::output::strain_map::write_strain_map(p, &image, &all, &strains);
+        if let Err(e) = drawn {
+            first.get_or_insert(e);
+        }
+    }
     summary(&all);
-    if args.table.is_none() && args.out.is_none() && args.fld.is_none() {
+    if args.table.is_none() && args.out.is_none() && args.fld.is_none() && args.map.is_none() {
         print_strains(&strains);
     }
     if let Some(e) = first {

@@ -7,7 +7,8 @@
 //! - [`overlay`]: SVG and PNG overlays of curves on the image;
 //! - [`diagnostics`]: `measure --diagnostics DIR`;
 //! - [`cad`]: DXF and SVG exports of the B-spline;
-//! - [`objects`]: the outputs of `measure --all`.
+//! - [`objects`]: the outputs of `measure --all`;
+//! - [`strain_map`]: `grid --map`, the circles coloured by their strain.
 
 pub mod cad;
 pub mod diagnostics;
@@ -15,6 +16,7 @@ pub mod measurement;
 pub mod model;
 pub mod objects;
 pub mod overlay;
+pub mod strain_map;
 
 use serde::Serialize;
 use std::io::Write;

@@ -191,6 +191,18 @@ fn grid_strains_from_a_synthetic_grid() {
     ]));
     let plot = vicurve::io::load_image(png.as_ref()).unwrap();
     assert_eq!((plot.width(), plot.height()), (1120, 960));
+    // The strain map: every circle, its colour's bin in the legend.
+    let (map_svg, map_png) = (p(d, "map.svg"), p(d, "map.png"));
+    for m in [&map_svg, &map_png] {
+        ok(&vicurve(&["grid", &img, "--diameter", "30", "--map", m]));
+    }
+    let map = std::fs::read_to_string(&map_svg).unwrap();
+    assert_eq!(map.matches("<polygon ").count(), 100);
+    let bins = map.matches("fill=\"black\">eps1 ").count();
+    assert!((2..=6).contains(&bins), "{bins} legend entries");
+    let drawn = vicurve::io::load_image(map_png.as_ref()).unwrap();
+    let grid_image = vicurve::io::load_image(img.as_ref()).unwrap();
+    assert_eq!(drawn.width(), grid_image.width());
 }
 
 /// Options of --all without it, and --all with --init, are refused.
