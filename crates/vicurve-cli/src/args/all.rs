@@ -12,6 +12,8 @@ pub struct AllArgs {
     /// whose edge is long and contrasted enough, each from its own traced
     /// start, in parallel; one object's failure is recorded and never stops
     /// the others (exit 3 when some failed). Within `--roi` if given.
+    /// With `--kind contour`: every ridge or valley line above a strength
+    /// (`--min-strength`), each followed and measured.
     #[arg(long)]
     pub all: bool,
     /// With --all: least boundary length, px (default: 4 pi R_last, 25 px
@@ -30,6 +32,12 @@ pub struct AllArgs {
     /// `parent` column gives the object each is in).
     #[arg(long)]
     pub holes: bool,
+    /// With --all --kind contour: the least line strength a line is
+    /// followed from (s^2 |lambda| of the smoothed image across the line,
+    /// gray levels; default 8 times its noise and at least a tenth of the
+    /// strongest line's).
+    #[arg(long, value_name = "STRENGTH")]
+    pub min_strength: Option<f64>,
     /// With --all: write one row per object as CSV (id, outcome, centroid,
     /// area, equivalent diameter, circle and ellipse with sigmas, model
     /// parameters with sigmas, RMS residual, message).
@@ -45,10 +53,11 @@ impl AllArgs {
                 || self.min_area.is_some()
                 || self.include_border
                 || self.holes
+                || self.min_strength.is_some()
                 || self.table.is_some())
         {
             return Err(Failure::Error(
-                "--min-length, --min-area, --include-border, --holes and --table go with --all"
+                "--min-length, --min-area, --include-border, --holes, --min-strength and --table go with --all"
                     .into(),
             ));
         }

@@ -13,6 +13,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use vicurve::model::ShapeModel;
 use vicurve::objects::{grid_strains, measure_all, AllConfig, GridStrain};
+use vicurve::virtual_image::Kind;
 
 /// Measure the strains of a circle grid.
 #[derive(clap::Args)]
@@ -138,7 +139,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             first.get_or_insert(e);
         }
     }
-    summary(&all);
+    summary(&all, Kind::Silhouette);
     if args.table.is_none() && args.out.is_none() && args.fld.is_none() && args.map.is_none() {
         print_strains(&strains);
     }

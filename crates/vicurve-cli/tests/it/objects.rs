@@ -284,3 +284,50 @@ fn overlays_show_every_object_with_its_id_and_holes_have_a_parent() {
     let overlay = vicurve::io::load_image(png.as_ref()).unwrap();
     assert_eq!((overlay.width(), overlay.height()), (400, 300));
 }
+
+/// `measure --all --kind contour`: every line of an image of two rings,
+/// followed and measured, one row each.
+#[test]
+fn measure_all_lines() {
+    use vicurve::render::{render, Method, RenderSpec};
+    use vicurve::truth::Shape;
+    let dir = tempfile::tempdir().unwrap();
+    let ring = |cx, cy, r| {
+        let spec = RenderSpec {
+            width: 260,
+            height: 160,
+            shape: Shape::Circle { cx, cy, r },
+            kind: vicurve::virtual_image::Kind::Contour,
+            line_width: 3.0,
+            method: Method::Coverage,
+            blur_sigma: 1.0,
+            noise: 0.0,
+            bits: None,
+            ..RenderSpec::default()
+        };
+        render(&spec).unwrap()
+    };
+    let (a, b) = (ring(70.3, 80.6, 45.0), ring(190.7, 78.2, 40.0));
+    let bg = RenderSpec::default().background;
+    let image = vicurve::Image::from_fn(260, 160, |x, y| a.get(x, y) + b.get(x, y) - bg);
+    let img = p(dir.path(), "rings.png");
+    vicurve::io::save_image(img.as_ref(), &image, 16).unwrap();
+    let table = p(dir.path(), "lines.csv");
+    let run = vicurve(&[
+        "measure", &img, "--all", "--kind", "contour", "--table", &table,
+    ]);
+    ok(&run);
+    assert!(text(&run.stderr).contains("2 bright line(s) found"));
+    let rows = csv(&table);
+    assert_eq!(rows.len() - 1, 2);
+    let r = rows[0].iter().position(|c| c == "circle_r").unwrap();
+    let mut radii: Vec<f64> = rows[1..]
+        .iter()
+        .map(|row| row[r].parse().unwrap())
+        .collect();
+    radii.sort_by(f64::total_cmp);
+    assert!(
+        (radii[0] - 40.0).abs() < 0.01 && (radii[1] - 45.0).abs() < 0.01,
+        "{radii:?}"
+    );
+}

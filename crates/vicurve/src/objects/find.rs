@@ -70,8 +70,8 @@ pub struct Found {
 
 /// Find the objects of `image` (module docs of [`super`]).
 ///
-/// Errors: [`Error::InvalidParameter`] for a bad region of interest,
-/// [`Error::NoSilhouette`] for a rectangle without contrast.
+/// Errors: [`crate::Error::InvalidParameter`] for a bad region of interest,
+/// [`crate::Error::NoSilhouette`] for a rectangle without contrast.
 pub fn find_objects(image: &Image, config: &AllConfig) -> Result<Found> {
     let lab = Labelled::new(image, config.roi)?;
     let bright = match config.polarity {

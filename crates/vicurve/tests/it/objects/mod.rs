@@ -4,4 +4,5 @@
 
 mod grid;
 mod holes;
+mod lines;
 mod scene;
