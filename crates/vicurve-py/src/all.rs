@@ -16,8 +16,13 @@ use vicurve::objects::{measure_all as measure_every, object_table, AllConfig, Al
 /// "bright", "dark") whose edge is long (`min_length`, px), large
 /// (`min_area`, px^2) and contrasted enough; defaults follow from the last
 /// band and the image noise. `roi=(x0, y0, x1, y1)` limits the search;
-/// objects cut by its border are skipped unless `include_border`. `model`
-/// ("circle", "ellipse", "polygon:N") is fitted to each.
+/// objects cut by its border are skipped unless `include_border`; with
+/// `holes`, the holes inside the objects are objects too (of the opposite
+/// polarity, numbered after them, the table's `parent` giving the object
+/// each is in). `kind="contour"` measures every ridge or valley line
+/// instead, each line whose strength is at least `min_strength` (default
+/// from the noise). `model` ("circle", "ellipse", "polygon:N") is fitted to
+/// each.
 ///
 /// Returns `(results, table)`: one entry per object, numbered row-major by
 /// centroid, a `Result` (None when the object could not be measured at
@@ -28,7 +33,8 @@ use vicurve::objects::{measure_all as measure_every, object_table, AllConfig, Al
 #[pyfunction]
 #[pyo3(signature = (
     image, *, polarity = "auto", model = None, min_length = None, min_area = None,
-    roi = None, include_border = false
+    roi = None, include_border = false, holes = false, kind = "silhouette",
+    min_strength = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn measure_all<'py>(
@@ -40,6 +46,9 @@ pub fn measure_all<'py>(
     min_area: Option<f64>,
     roi: Option<(f64, f64, f64, f64)>,
     include_border: bool,
+    holes: bool,
+    kind: &str,
+    min_strength: Option<f64>,
 ) -> PyResult<(Vec<Option<PyMeasurement>>, Bound<'py, PyDict>)> {
     let model: Option<ShapeModel> = model.map(str::parse).transpose().map_err(to_py_err)?;
     let config = AllConfig {
@@ -49,6 +58,12 @@ pub fn measure_all<'py>(
         min_area,
         roi: roi.map(|(a, b, c, d)| [a, b, c, d]),
         include_border,
+        holes,
+        min_strength,
+        fit: vicurve::fit::FitConfig {
+            kind: kind.parse().map_err(to_py_err)?,
+            ..vicurve::fit::FitConfig::default()
+        },
         ..AllConfig::default()
     };
     config.validate().map_err(to_py_err)?;

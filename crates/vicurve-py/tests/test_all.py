@@ -55,3 +55,24 @@ def test_the_table_is_a_dataframe_with_pandas():
     _, table = vicurve.measure_all(discs([(60.3, 50.2)]))
     assert isinstance(table, pd.DataFrame)
     assert list(table["outcome"]) == ["measured"]
+
+
+def test_holes_and_lines():
+    # A disc of radius 30 with a hole of radius 12: with holes=True the
+    # hole is an object too, its parent the disc.
+    h, w = 160, 160
+    yy, xx = np.mgrid[0:h * 4, 0:w * 4]
+    x, y = (xx + 0.5) / 4 - 0.5, (yy + 0.5) / 4 - 0.5
+    d = np.hypot(x - 80.3, y - 79.6)
+    ring = ((d < 30.0) & (d > 12.0)).reshape(h, 4, w, 4).mean(axis=(1, 3))
+    _, table = vicurve.measure_all(0.2 + 0.6 * ring, holes=True, model="circle")
+    assert list(table["outcome"]) == ["measured", "measured"]
+    assert np.isnan(table["parent"][0]) and table["parent"][1] == 0
+    assert abs(table["model_r"][1] - 12.0) < 0.02
+    # A thin ring (3 px wide) measured as a line.
+    line = ((d < 31.5) & (d > 28.5)).reshape(h, 4, w, 4).mean(axis=(1, 3))
+    _, lines = vicurve.measure_all(0.2 + 0.6 * line, kind="contour", model="circle")
+    assert list(lines["outcome"]) == ["measured"]
+    assert abs(lines["model_r"][0] - 30.0) < 0.02
+    with pytest.raises(ValueError):
+        vicurve.measure_all(line, kind="wiggle")

@@ -15,7 +15,7 @@ pub mod stack;
 pub mod video;
 pub mod write;
 pub use stack::{page_count, TiffStack};
-pub use write::{write_atomic, write_points_csv};
+pub use write::{sample_row, write_atomic, write_points_csv, SAMPLE_COLUMNS};
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Write};

@@ -12,6 +12,8 @@ pub struct AllArgs {
     /// whose edge is long and contrasted enough, each from its own traced
     /// start, in parallel; one object's failure is recorded and never stops
     /// the others (exit 3 when some failed). Within `--roi` if given.
+    /// With `--kind contour`: every ridge or valley line above a strength
+    /// (`--min-strength`), each followed and measured.
     #[arg(long)]
     pub all: bool,
     /// With --all: least boundary length, px (default: 4 pi R_last, 25 px
@@ -25,6 +27,17 @@ pub struct AllArgs {
     /// --roi), as open curves along their visible edge.
     #[arg(long)]
     pub include_border: bool,
+    /// With --all: also measure the holes inside the objects, as objects of
+    /// the opposite polarity (numbered after the objects; the table's
+    /// `parent` column gives the object each is in).
+    #[arg(long)]
+    pub holes: bool,
+    /// With --all --kind contour: the least line strength a line is
+    /// followed from (s^2 |lambda| of the smoothed image across the line,
+    /// gray levels; default 8 times its noise and at least a tenth of the
+    /// strongest line's).
+    #[arg(long, value_name = "STRENGTH")]
+    pub min_strength: Option<f64>,
     /// With --all: write one row per object as CSV (id, outcome, centroid,
     /// area, equivalent diameter, circle and ellipse with sigmas, model
     /// parameters with sigmas, RMS residual, message).
@@ -39,10 +52,13 @@ impl AllArgs {
             && (self.min_length.is_some()
                 || self.min_area.is_some()
                 || self.include_border
+                || self.holes
+                || self.min_strength.is_some()
                 || self.table.is_some())
         {
             return Err(Failure::Error(
-                "--min-length, --min-area, --include-border and --table go with --all".into(),
+                "--min-length, --min-area, --include-border, --holes, --min-strength and --table go with --all"
+                    .into(),
             ));
         }
         Ok(())

@@ -33,10 +33,13 @@ pub enum ShapeName {
     /// discs cut by the border; `--truth` lists each shape and its role.
     /// Defaults: 1024x768, blur 1, noise 0.01, 8 bits.
     Scene,
-    /// A 10x10 grid of circles of diameter 2 x `--radius` (default 15 px),
-    /// 60 px apart, each deformed into an exact ellipse by a known smooth
-    /// strain field; `--truth` gives every ellipse and its strains.
-    /// Defaults: blur 1, noise 0.01, 8 bits.
+    /// A 10x10 grid of circles of diameter D = 2 x `--radius` (default 15
+    /// px), their pitch the larger of 2 D and 1.3 D + 24 px (with
+    /// `--size`, as far apart as the image allows, the grid centred; an
+    /// error when they would come closer than 12 px),
+    /// each deformed into an exact ellipse by a known smooth strain field;
+    /// `--truth` gives every ellipse and its strains. Defaults: blur 1,
+    /// noise 0.01, 8 bits.
     Grid,
 }
 

@@ -13,6 +13,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use vicurve::model::ShapeModel;
 use vicurve::objects::{grid_strains, measure_all, AllConfig, GridStrain};
+use vicurve::virtual_image::Kind;
 
 /// Measure the strains of a circle grid.
 #[derive(clap::Args)]
@@ -43,9 +44,15 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Write the forming-limit scatter (eps2 horizontal, eps1 vertical,
-    /// two-sigma error bars) as SVG.
-    #[arg(long, value_name = "FILE.svg")]
+    /// two-sigma error bars): PNG when FILE ends in .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub fld: Option<PathBuf>,
+    /// Write the strain map: every measured circle over the image in a
+    /// colour by eps1 (six bins, blue lowest to red highest; the SVG's
+    /// legend gives their ranges), with its id: PNG when FILE ends in
+    /// .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub map: Option<PathBuf>,
 }
 
 /// The JSON of `grid --out`.
@@ -122,12 +129,18 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if let Some(p) = &args.fld {
         let measured: Vec<&GridStrain> = strains.iter().flatten().collect();
         let title = format!("{input}: {} circles, D0 = {d0:.2} px", measured.len());
-        if let Err(e) = crate::plot::fld::write_fld_svg(p, &measured, &title) {
+        if let Err(e) = crate::plot::fld::write_fld(p, &measured, &title) {
             first.get_or_insert(e);
         }
     }
-    summary(&all);
-    if args.table.is_none() && args.out.is_none() && args.fld.is_none() {
+    if let Some(p) = &args.map {
+        let drawn = crate::output::strain_map::write_strain_map(p, &image, &all, &strains);
+        if let Err(e) = drawn {
+            first.get_or_insert(e);
+        }
+    }
+    summary(&all, Kind::Silhouette);
+    if args.table.is_none() && args.out.is_none() && args.fld.is_none() && args.map.is_none() {
         print_strains(&strains);
     }
     if let Some(e) = first {
@@ -139,20 +152,33 @@ pub fn run(args: Args) -> Result<(), Failure> {
 fn print_strains(strains: &[Option<GridStrain>]) {
     println!("id  x  y  eps1 +- s  eps2 +- s  eps3 +- s  angle_deg");
     for s in strains.iter().flatten() {
+        let e = strain_values(s);
         println!(
             "{} {:.3} {:.3} {:.5} {:.1e} {:.5} {:.1e} {:.5} {:.1e} {:.2}",
             s.id,
             s.centre[0],
             s.centre[1],
-            s.eps1,
-            s.sigma_eps1,
-            s.eps2,
-            s.sigma_eps2,
-            s.eps3,
-            s.sigma_eps3,
+            e[0],
+            e[1],
+            e[2],
+            e[3],
+            e[4],
+            e[5],
             s.angle.to_degrees()
         );
     }
+}
+
+/// `eps1, sigma_eps1, eps2, sigma_eps2, eps3, sigma_eps3` of `s`.
+fn strain_values(s: &GridStrain) -> [f64; 6] {
+    [
+        s.eps1,
+        s.sigma_eps1,
+        s.eps2,
+        s.sigma_eps2,
+        s.eps3,
+        s.sigma_eps3,
+    ]
 }
 
 /// The strain table (`--table`), one row per measured circle.
@@ -175,18 +201,9 @@ fn write_table(
         if let Some(k) = scale {
             v.extend([s.centre[0] * k, s.centre[1] * k]);
         }
-        v.extend([
-            s.a,
-            s.b,
-            s.eps1,
-            s.sigma_eps1,
-            s.eps2,
-            s.sigma_eps2,
-            s.eps3,
-            s.sigma_eps3,
-            s.angle.to_degrees(),
-            s.sigma_angle.to_degrees(),
-        ]);
+        v.extend([s.a, s.b]);
+        v.extend(strain_values(s));
+        v.extend([s.angle.to_degrees(), s.sigma_angle.to_degrees()]);
         let text: Vec<String> = v.into_iter().map(format_value).collect();
         writeln!(w, "{},{}", s.id, text.join(",")).map_err(err)?;
     }

@@ -5,6 +5,7 @@ use crate::args::all::object_polarity;
 use crate::failure::Failure;
 use crate::output::objects;
 use vicurve::objects::{measure_all, AllConfig, AllResult};
+use vicurve::virtual_image::Kind;
 
 /// The configuration of `--all` from `measure`'s flags: `--polarity` is the
 /// objects' phase; the fit's polarity is set per object.
@@ -25,6 +26,8 @@ pub fn config(args: &Args) -> Result<AllConfig, Failure> {
         min_area: args.all.min_area,
         roi: args.start.automatic()?.roi,
         include_border: args.all.include_border,
+        holes: args.all.holes,
+        min_strength: args.all.min_strength,
         model: args.model,
         fit,
         ..AllConfig::default()
@@ -34,13 +37,9 @@ pub fn config(args: &Args) -> Result<AllConfig, Failure> {
 pub fn run(args: Args) -> Result<(), Failure> {
     let config = config(&args)?;
     config.validate()?;
-    if args.diagnostics.is_some()
-        || args.cad.any()
-        || args.outputs.svg.is_some()
-        || args.outputs.png.is_some()
-    {
+    if args.diagnostics.is_some() || args.cad.any() {
         return Err(Failure::Error(
-            "--all writes --out, --points and --table; --svg, --png, --diagnostics and the CAD files are for one curve".into(),
+            "--all writes --out, --points, --table, --svg and --png; --diagnostics and the CAD files are for one curve".into(),
         ));
     }
     let image = vicurve::io::load_image(&args.image)?;
@@ -50,28 +49,40 @@ pub fn run(args: Args) -> Result<(), Failure> {
         &all,
         &config,
         &input,
-        (image.width(), image.height()),
-        args.outputs.out.as_deref(),
-        args.outputs.points.as_deref(),
+        &image,
+        &args.outputs,
         args.all.table.as_deref(),
     )?;
-    summary(&all);
+    summary(&all, config.fit.kind);
     finish(&all)
 }
 
-/// One line on what was found, one per failed object.
-pub fn summary(all: &AllResult) {
+/// One line on what was found (objects, or lines with `kind` contour), one
+/// per failed object.
+pub fn summary(all: &AllResult, kind: Kind) {
     let f = &all.found;
-    eprintln!(
+    if kind == Kind::Contour {
+        eprintln!(
+            "vicurve: {} {} line(s) found (least strength {:.4}, strength noise {:.4}); left out: {} short, {} not followed",
+            all.objects.len(),
+            if f.bright { "bright" } else { "dark" },
+            f.threshold,
+            f.noise,
+            f.small,
+            f.faint
+        );
+    } else {
+        eprintln!(
         "vicurve: {} {} object(s) found (threshold {:.4}, noise {:.4}); left out: {} small, {} faint, {} cut by the border",
         all.objects.len(),
         if f.bright { "bright" } else { "dark" },
         f.threshold,
         f.noise,
-        f.small,
-        f.faint,
-        f.border
-    );
+            f.small,
+            f.faint,
+            f.border
+        );
+    }
     for o in all.objects.iter() {
         if let Some(e) = &o.failure {
             let c = o.region.centroid;

@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod demo;
 pub mod eval;
+pub mod eval_objects;
 pub mod export;
 pub mod grid;
 pub mod measure;

@@ -7,7 +7,8 @@
 //! - [`overlay`]: SVG and PNG overlays of curves on the image;
 //! - [`diagnostics`]: `measure --diagnostics DIR`;
 //! - [`cad`]: DXF and SVG exports of the B-spline;
-//! - [`objects`]: the outputs of `measure --all`.
+//! - [`objects`]: the outputs of `measure --all`;
+//! - [`strain_map`]: `grid --map`, the circles coloured by their strain.
 
 pub mod cad;
 pub mod diagnostics;
@@ -15,6 +16,7 @@ pub mod measurement;
 pub mod model;
 pub mod objects;
 pub mod overlay;
+pub mod strain_map;
 
 use serde::Serialize;
 use std::path::Path;
@@ -32,7 +34,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), String> {
 
 /// The samples CSV and atomic writes live in the library, so that the
 /// Python package writes the same files.
-pub use vicurve::io::{write_atomic, write_points_csv};
+pub use vicurve::io::{sample_row, write_atomic, write_points_csv, SAMPLE_COLUMNS};
 
 #[cfg(test)]
 mod tests {

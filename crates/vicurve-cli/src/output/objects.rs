@@ -1,7 +1,10 @@
 //! The outputs of `measure --all`: every object in one result file, the
-//! samples with an `object` column, one table row per object.
+//! samples with an `object` column, one table row per object, and the
+//! overlays with every object's curve and id.
 
-use super::write_json;
+use super::overlay::{write_png_tagged, write_svg_tagged, Layer, Style, Tag};
+use super::{sample_row, write_json, SAMPLE_COLUMNS};
+use crate::args::Outputs;
 use crate::failure::Failure;
 use serde::Serialize;
 use std::io::Write;
@@ -9,6 +12,7 @@ use std::path::Path;
 use vicurve::model::ModelFit;
 use vicurve::objects::{object_table, AllConfig, AllResult, Found, ObjectFailure, RegionInfo};
 use vicurve::report::{InputInfo, ResultFile, CONVENTION};
+use vicurve::Image;
 
 /// The result file of `measure --all`.
 #[derive(Serialize)]
@@ -36,33 +40,101 @@ struct ObjectRecord<'a> {
     model: Option<&'a ModelFit>,
 }
 
-/// Write `--out`, `--points` and `--table` as asked; independent, the
-/// first error reported.
+/// Write `--out`, `--points`, `--table`, `--svg` and `--png` as asked;
+/// independent, the first error reported.
 pub fn write(
     all: &AllResult,
     config: &AllConfig,
     input: &str,
-    size: (usize, usize),
-    out: Option<&Path>,
-    points: Option<&Path>,
+    image: &Image,
+    outputs: &Outputs,
     table: Option<&Path>,
 ) -> Result<(), Failure> {
+    let size = (image.width(), image.height());
     let mut first: Option<String> = None;
     let mut note = |r: Result<(), String>| {
         if let Err(e) = r {
             first.get_or_insert(e);
         }
     };
-    if let Some(p) = out {
+    if let Some(p) = &outputs.out {
         note(write_json(p, &record(all, config, input, size)));
     }
-    if let Some(p) = points {
+    if let Some(p) = &outputs.points {
         note(write_points(p, all));
     }
     if let Some(p) = table {
         note(write_table(p, all));
     }
+    if outputs.svg.is_some() || outputs.png.is_some() {
+        let (layers, tags) = overlay(all);
+        if let Some(p) = &outputs.svg {
+            note(write_svg_tagged(p, image, &layers, &tags));
+        }
+        if let Some(p) = &outputs.png {
+            note(write_png_tagged(
+                p,
+                image,
+                &layers,
+                &tags,
+                outputs.png_scale,
+            ));
+        }
+    }
     first.map_or(Ok(()), |e| Err(Failure::Error(e)))
+}
+
+/// Every object's measured curve (red; orange for a failed object's last
+/// curve, dashed blue for an object with no curve: its traced start) and
+/// its id at its region's centroid.
+fn overlay(all: &AllResult) -> (Vec<Layer>, Vec<Tag>) {
+    let style = |color: [u8; 4], dash: Option<[f32; 2]>| Style {
+        color,
+        width: 1.0,
+        dash,
+    };
+    let mut layers = Vec::new();
+    let mut tags = Vec::new();
+    for o in &all.objects {
+        let (label, points, closed, st) = match (&o.measurement, &o.start) {
+            (Some(m), _) if o.failure.is_none() => (
+                "measured object (id at its centre)",
+                m.points(),
+                m.curve.is_closed(),
+                style([255, 40, 40, 255], None),
+            ),
+            (Some(m), _) => (
+                "failed object, its last curve",
+                m.points(),
+                m.curve.is_closed(),
+                style([255, 150, 0, 255], None),
+            ),
+            (None, Some(init)) => (
+                "failed object, its start",
+                init.dense_points(1.0).unwrap_or_default(),
+                init.is_closed(),
+                style([40, 120, 255, 255], Some([4.0, 3.0])),
+            ),
+            (None, None) => continue,
+        };
+        layers.push(Layer {
+            label: label.into(),
+            points,
+            closed,
+            style: st,
+        });
+        let color = if o.failure.is_none() {
+            [255, 40, 40]
+        } else {
+            [255, 150, 0]
+        };
+        tags.push(Tag {
+            at: o.region.centroid,
+            text: o.id.to_string(),
+            color,
+        });
+    }
+    (layers, tags)
 }
 
 fn record<'a>(
@@ -109,25 +181,11 @@ fn write_points(path: &Path, all: &AllResult) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let file = std::fs::File::create(path).map_err(err)?;
     let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "object,s,x,y,nx,ny,sigma,weight,sigma_noise,misfit").map_err(err)?;
+    writeln!(w, "object,{SAMPLE_COLUMNS}").map_err(err)?;
     for o in all.objects.iter().filter(|o| o.failure.is_none()) {
         let Some(m) = &o.measurement else { continue };
         for s in &m.samples {
-            writeln!(
-                w,
-                "{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3},{:.3e},{}",
-                o.id,
-                s.s,
-                s.x,
-                s.y,
-                s.nx,
-                s.ny,
-                s.sigma,
-                s.weight,
-                s.sigma_noise,
-                u8::from(s.misfit)
-            )
-            .map_err(err)?;
+            writeln!(w, "{},{}", o.id, sample_row(s)).map_err(err)?;
         }
     }
     w.flush().map_err(err)

@@ -14,6 +14,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::plot::{draw_text, Anchor};
 use tiny_skia::{LineCap, LineJoin, Paint, PathBuilder, Pixmap, Stroke, StrokeDash, Transform};
 use vicurve::Image;
 
@@ -47,6 +48,33 @@ pub struct Layer {
     pub style: Style,
 }
 
+/// A short text drawn over the image, centred on a point (an object's id).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tag {
+    /// Centre of the text `(x, y)`, image pixels.
+    pub at: [f64; 2],
+    /// The text (Basic Latin in the PNG).
+    pub text: String,
+    /// Red, green, blue (opaque).
+    pub color: [u8; 3],
+}
+
+/// The tags' font size, image pixels: readable at the overlays' display
+/// sizes whatever the image's size.
+fn tag_size(image: &Image) -> f64 {
+    (image.width().max(image.height()) as f64 / 100.0).max(6.0)
+}
+
+/// [`write_svg`] without tags.
+pub fn write_svg(path: &Path, image: &Image, layers: &[Layer]) -> Result<(), String> {
+    write_svg_tagged(path, image, layers, &[])
+}
+
+/// [`write_png`] without tags.
+pub fn write_png(path: &Path, image: &Image, layers: &[Layer], scale: u32) -> Result<(), String> {
+    write_png_tagged(path, image, layers, &[], scale)
+}
+
 /// Write an SVG overlay: the image, embedded as a base64 8-bit gray PNG shown
 /// with `image-rendering: pixelated`, and each layer as a `<polyline>` (or
 /// `<polygon>` when closed) titled with its label, plus a legend in the top
@@ -58,9 +86,17 @@ pub struct Layer {
 /// Coordinates are written with 4 decimals (1/10000 pixel), enough for
 /// sub-pixel measurements.
 ///
+/// Layers of the same label and style share one legend entry; the `tags`
+/// are drawn on top, centred on their points.
+///
 /// Errors (one line naming the file): a layer with a non-finite point or an
 /// invalid style, or the file cannot be written.
-pub fn write_svg(path: &Path, image: &Image, layers: &[Layer]) -> Result<(), String> {
+pub fn write_svg_tagged(
+    path: &Path,
+    image: &Image,
+    layers: &[Layer],
+    tags: &[Tag],
+) -> Result<(), String> {
     let fail = |what: String| format!("cannot write SVG overlay {}: {what}", path.display());
     for layer in layers {
         check_layer(layer).map_err(fail)?;
@@ -91,6 +127,7 @@ pub fn write_svg(path: &Path, image: &Image, layers: &[Layer]) -> Result<(), Str
         svg_layer(&mut svg, layer);
     }
     let _ = writeln!(svg, "</g>");
+    svg_tags(&mut svg, tags, tag_size(image));
     svg_legend(&mut svg, layers, w.max(h) as f64);
     let _ = writeln!(svg, "</svg>");
     std::fs::write(path, svg).map_err(|e| fail(e.to_string()))
@@ -98,12 +135,19 @@ pub fn write_svg(path: &Path, image: &Image, layers: &[Layer]) -> Result<(), Str
 
 /// Write a PNG overlay: the image upscaled by the integer `scale` (nearest
 /// neighbour, 1 = native size), gray levels stretched as the module says,
-/// with the layers drawn anti-aliased on top. No legend: text needs a font.
+/// with the layers drawn anti-aliased on top, then the `tags` (the plots'
+/// 8x8 font). No legend.
 ///
 /// Errors (one line naming the file): `scale` is 0, the result would exceed
 /// 100 Mpixel, a layer has a non-finite point or an invalid style, or the
 /// file cannot be written.
-pub fn write_png(path: &Path, image: &Image, layers: &[Layer], scale: u32) -> Result<(), String> {
+pub fn write_png_tagged(
+    path: &Path,
+    image: &Image,
+    layers: &[Layer],
+    tags: &[Tag],
+    scale: u32,
+) -> Result<(), String> {
     let fail = |what: String| format!("cannot write PNG overlay {}: {what}", path.display());
     if scale == 0 {
         return Err(fail("the scale must be at least 1".to_string()));
@@ -184,6 +228,15 @@ pub fn write_png(path: &Path, image: &Image, layers: &[Layer], scale: u32) -> Re
         };
         pixmap.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
     }
+    let k = ((tag_size(image) * s / 9.0).round() as i64).max(1);
+    for t in tags {
+        // The baseline 3.5 cells below the centre: the text centred on it.
+        let at = (
+            ((t.at[0] + 0.5) * s) as i64,
+            ((t.at[1] + 0.5) * s) as i64 + 7 * k / 2,
+        );
+        draw_text(&mut pixmap, at, &t.text, k, Anchor::Middle, false, t.color);
+    }
     let png = pixmap.encode_png().map_err(|e| fail(e.to_string()))?;
     std::fs::write(path, png).map_err(|e| fail(e.to_string()))
 }
@@ -243,9 +296,44 @@ fn svg_layer(svg: &mut String, layer: &Layer) {
     }
 }
 
+/// The tags as `<text>` centred on their points, `size` user units high.
+fn svg_tags(svg: &mut String, tags: &[Tag], size: f64) {
+    if tags.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        svg,
+        r#"<g font-family="sans-serif" font-size="{size:.3}" text-anchor="middle">"#
+    );
+    for t in tags {
+        let _ = writeln!(
+            svg,
+            r#"<text x="{:.3}" y="{:.3}" fill="rgb({},{},{})">{}</text>"#,
+            t.at[0] + 0.5,
+            t.at[1] + 0.5 + 0.35 * size,
+            t.color[0],
+            t.color[1],
+            t.color[2],
+            xml_escape(&t.text)
+        );
+    }
+    let _ = writeln!(svg, "</g>");
+}
+
 /// A legend box in the top left corner, sized relative to the image so that
-/// it stays readable whatever the image's size.
+/// it stays readable whatever the image's size; one entry per label and
+/// style.
 fn svg_legend(svg: &mut String, layers: &[Layer], image_size: f64) {
+    let mut entries: Vec<&Layer> = Vec::new();
+    for l in layers {
+        if !entries
+            .iter()
+            .any(|e| e.label == l.label && e.style == l.style)
+        {
+            entries.push(l);
+        }
+    }
+    let layers = &entries[..];
     if layers.is_empty() {
         return;
     }

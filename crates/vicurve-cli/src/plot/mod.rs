@@ -336,12 +336,62 @@ struct PngCanvas {
     scale: f64,
 }
 
-impl PngCanvas {
-    fn set(&mut self, x: i64, y: i64, rgb: [u8; 3]) {
-        let (w, h) = (self.pixmap.width() as i64, self.pixmap.height() as i64);
-        if (0..w).contains(&x) && (0..h).contains(&y) {
-            let i = ((y * w + x) * 4) as usize;
-            self.pixmap.data_mut()[i..i + 4].copy_from_slice(&[rgb[0], rgb[1], rgb[2], 255]);
+/// Set the pixel `(x, y)` of `pixmap` to `rgb` (opaque); nothing outside.
+fn set_pixel(pixmap: &mut Pixmap, x: i64, y: i64, rgb: [u8; 3]) {
+    let (w, h) = (pixmap.width() as i64, pixmap.height() as i64);
+    if (0..w).contains(&x) && (0..h).contains(&y) {
+        let i = ((y * w + x) * 4) as usize;
+        pixmap.data_mut()[i..i + 4].copy_from_slice(&[rgb[0], rgb[1], rgb[2], 255]);
+    }
+}
+
+/// Draw `s` in `rgb` into `pixmap` with the 8x8 font scaled by the whole
+/// factor `k`, the baseline's anchor point at pixel `(ox, oy)`; `vertical`
+/// turns it 90 degrees counter-clockwise (reading upwards). Basic Latin
+/// only; other characters are drawn as `?`.
+pub(crate) fn draw_text(
+    pixmap: &mut Pixmap,
+    (ox, oy): (i64, i64),
+    s: &str,
+    k: i64,
+    anchor: Anchor,
+    vertical: bool,
+    rgb: [u8; 3],
+) {
+    let advance = 8 * k;
+    let len = s.chars().count() as i64 * advance;
+    let shift = match anchor {
+        Anchor::Start => 0,
+        Anchor::Middle => len / 2,
+        Anchor::End => len,
+    };
+    for (n, ch) in s.chars().enumerate() {
+        let code = if ch.is_ascii() {
+            ch as usize
+        } else {
+            '?' as usize
+        };
+        let glyph = BASIC_LEGACY[code];
+        let along = n as i64 * advance - shift;
+        for (row, bits) in glyph.iter().enumerate() {
+            for col in 0..8 {
+                if bits >> col & 1 == 0 {
+                    continue;
+                }
+                // Cell position: `along + col` along the text, `row - 7`
+                // from the baseline (the cell's last row is below it).
+                let (u, v) = (along + col * k, (row as i64 - 7) * k);
+                for du in 0..k {
+                    for dv in 0..k {
+                        let (px, py) = if vertical {
+                            (ox + v + dv, oy - (u + du))
+                        } else {
+                            (ox + u + du, oy + v + dv)
+                        };
+                        set_pixel(pixmap, px, py, rgb);
+                    }
+                }
+            }
         }
     }
 }
@@ -397,44 +447,8 @@ impl Canvas for PngCanvas {
         // Glyphs are 8 px cells scaled by a whole factor near the font size
         // (an 8 px cell's letters are about 7 px: size / 7 per unit).
         let k = ((size * self.scale / 9.0).round() as i64).max(1);
-        let advance = 8 * k;
-        let len = s.chars().count() as i64 * advance;
-        let shift = match anchor {
-            Anchor::Start => 0,
-            Anchor::Middle => len / 2,
-            Anchor::End => len,
-        };
-        let (ox, oy) = ((x * self.scale) as i64, (y * self.scale) as i64);
-        for (n, ch) in s.chars().enumerate() {
-            // Basic Latin only (the plots' texts are ASCII); others as '?'.
-            let code = if ch.is_ascii() {
-                ch as usize
-            } else {
-                '?' as usize
-            };
-            let glyph = BASIC_LEGACY[code];
-            let along = n as i64 * advance - shift;
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits >> col & 1 == 0 {
-                        continue;
-                    }
-                    // Cell position: `along + col` along the text, `row - 7`
-                    // from the baseline (the cell's last row is below it).
-                    let (u, v) = (along + col * k, (row as i64 - 7) * k);
-                    for du in 0..k {
-                        for dv in 0..k {
-                            let (px, py) = if vertical {
-                                (ox + v + dv, oy - (u + du))
-                            } else {
-                                (ox + u + du, oy + v + dv)
-                            };
-                            self.set(px, py, [0, 0, 0]);
-                        }
-                    }
-                }
-            }
-        }
+        let at = ((x * self.scale) as i64, (y * self.scale) as i64);
+        draw_text(&mut self.pixmap, at, s, k, anchor, vertical, [0, 0, 0]);
     }
 }
 

@@ -71,6 +71,19 @@ fn measure_all_on_a_scene() {
     let pts = csv(&points);
     assert_eq!(pts[0][0], "object");
     assert!(pts[1..].iter().any(|r| r[0] == "49"));
+    // eval against the scene: object by object, each matched, none extra.
+    let eval = p(d, "eval.json");
+    let scored = vicurve(&["eval", &points, &truth, "--json", &eval]);
+    ok(&scored);
+    assert!(
+        text(&scored.stdout).contains("matched: 50 object(s); missed: []; extra: []"),
+        "{}",
+        text(&scored.stdout)
+    );
+    let e = json(&eval);
+    let objects = e["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 50);
+    assert!(objects.iter().all(|o| o["role"] == "object"));
 }
 
 /// Two discs touching among isolated ones: the pair fails with its reason,
@@ -134,7 +147,7 @@ fn grid_strains_from_a_synthetic_grid() {
         &fld,
     ]));
     let svg = std::fs::read_to_string(&fld).unwrap();
-    assert_eq!(svg.matches(r#"class="circle""#).count(), 100);
+    assert_eq!(svg.matches("<circle ").count(), 100);
     let rows = csv(&table);
     assert_eq!(rows.len() - 1, 100);
     let col = |n: &str| rows[0].iter().position(|c| c == n).unwrap();
@@ -164,6 +177,32 @@ fn grid_strains_from_a_synthetic_grid() {
         &mm,
     ]));
     assert!(csv(&mm)[0].contains(&"x_mm".to_string()));
+    // The scatter as PNG: an image twice the SVG's size.
+    let png = p(d, "fld.png");
+    ok(&vicurve(&[
+        "grid",
+        &img,
+        "--diameter",
+        "30",
+        "--roi",
+        "0,0,200,200",
+        "--fld",
+        &png,
+    ]));
+    let plot = vicurve::io::load_image(png.as_ref()).unwrap();
+    assert_eq!((plot.width(), plot.height()), (1120, 960));
+    // The strain map: every circle, its colour's bin in the legend.
+    let (map_svg, map_png) = (p(d, "map.svg"), p(d, "map.png"));
+    for m in [&map_svg, &map_png] {
+        ok(&vicurve(&["grid", &img, "--diameter", "30", "--map", m]));
+    }
+    let map = std::fs::read_to_string(&map_svg).unwrap();
+    assert_eq!(map.matches("<polygon ").count(), 100);
+    let bins = map.matches("fill=\"black\">eps1 ").count();
+    assert!((2..=6).contains(&bins), "{bins} legend entries");
+    let drawn = vicurve::io::load_image(map_png.as_ref()).unwrap();
+    let grid_image = vicurve::io::load_image(img.as_ref()).unwrap();
+    assert_eq!(drawn.width(), grid_image.width());
 }
 
 /// Options of --all without it, and --all with --init, are refused.
@@ -173,4 +212,122 @@ fn all_options_are_checked() {
     assert_error(&out, 1, "go with --all");
     let out = vicurve(&["measure", "x.png", "--all", "--init", "circle:1,2,3"]);
     assert_error(&out, 1, "drop --init");
+}
+
+/// `synth grid --size` makes an image of that size (the grid spread over
+/// it), and refuses one too small for the circles.
+#[test]
+fn synth_grid_honours_the_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = p(dir.path(), "grid.png");
+    ok(&vicurve(&[
+        "synth", "grid", "--size", "900x800", "--out", &img,
+    ]));
+    let image = vicurve::io::load_image(img.as_ref()).unwrap();
+    assert_eq!((image.width(), image.height()), (900, 800));
+    let out = vicurve(&["synth", "grid", "--size", "300x300", "--out", &img]);
+    assert_error(&out, 1, "a larger image or smaller circles");
+}
+
+/// `measure --all --svg --png`: every object's curve with its id, one
+/// legend entry for all the measured ones; `--holes` adds the hole of a
+/// holed disc to the table with its parent.
+#[test]
+fn overlays_show_every_object_with_its_id_and_holes_have_a_parent() {
+    use vicurve::render::scene::{render_scene, Role, Scene, SceneItem};
+    use vicurve::truth::Shape;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let item = |cx, cy, r, role| SceneItem {
+        shape: Shape::Circle { cx, cy, r },
+        role,
+        strain: None,
+    };
+    let scene = Scene {
+        width: 400,
+        height: 300,
+        items: vec![
+            item(70.3, 60.2, 20.0, Role::Object),
+            item(200.6, 70.4, 18.0, Role::Object),
+            item(80.2, 220.7, 22.0, Role::Object),
+            item(300.4, 190.6, 50.0, Role::Object),
+            item(301.3, 189.9, 18.0, Role::Hole),
+        ],
+        foreground: 0.8,
+        background: 0.2,
+        blur_sigma: 1.0,
+        noise: 0.01,
+        seed: 3,
+        bits: Some(8),
+        d0: None,
+    };
+    let image = render_scene(&scene).unwrap();
+    let img = p(d, "holed.png");
+    vicurve::io::save_image(img.as_ref(), &image, 8).unwrap();
+    let (svg, png, table) = (p(d, "o.svg"), p(d, "o.png"), p(d, "t.csv"));
+    let run = vicurve(&[
+        "measure", &img, "--all", "--holes", "--svg", &svg, "--png", &png, "--table", &table,
+    ]);
+    ok(&run);
+    let rows = csv(&table);
+    assert_eq!(rows.len() - 1, 5, "{}", text(&run.stderr));
+    let parent = rows[0].iter().position(|c| c == "parent").unwrap();
+    let holes: Vec<_> = rows[1..].iter().filter(|r| !r[parent].is_empty()).collect();
+    assert_eq!(holes.len(), 1);
+    assert_eq!(holes[0][0], "4");
+    let text_svg = std::fs::read_to_string(&svg).unwrap();
+    for id in 0..5 {
+        assert!(text_svg.contains(&format!(">{id}</text>")), "id {id}");
+    }
+    let legend = ">measured object (id at its centre)</text>";
+    assert_eq!(text_svg.matches(legend).count(), 1);
+    let overlay = vicurve::io::load_image(png.as_ref()).unwrap();
+    assert_eq!((overlay.width(), overlay.height()), (400, 300));
+}
+
+/// `measure --all --kind contour`: every line of an image of two rings,
+/// followed and measured, one row each.
+#[test]
+fn measure_all_lines() {
+    use vicurve::render::{render, Method, RenderSpec};
+    use vicurve::truth::Shape;
+    let dir = tempfile::tempdir().unwrap();
+    let ring = |cx, cy, r| {
+        let spec = RenderSpec {
+            width: 260,
+            height: 160,
+            shape: Shape::Circle { cx, cy, r },
+            kind: vicurve::virtual_image::Kind::Contour,
+            line_width: 3.0,
+            method: Method::Coverage,
+            blur_sigma: 1.0,
+            noise: 0.0,
+            bits: None,
+            ..RenderSpec::default()
+        };
+        render(&spec).unwrap()
+    };
+    let (a, b) = (ring(70.3, 80.6, 45.0), ring(190.7, 78.2, 40.0));
+    let bg = RenderSpec::default().background;
+    let image = vicurve::Image::from_fn(260, 160, |x, y| a.get(x, y) + b.get(x, y) - bg);
+    let img = p(dir.path(), "rings.png");
+    vicurve::io::save_image(img.as_ref(), &image, 16).unwrap();
+    let table = p(dir.path(), "lines.csv");
+    let run = vicurve(&[
+        "measure", &img, "--all", "--kind", "contour", "--table", &table,
+    ]);
+    ok(&run);
+    assert!(text(&run.stderr).contains("2 bright line(s) found"));
+    let rows = csv(&table);
+    assert_eq!(rows.len() - 1, 2);
+    let r = rows[0].iter().position(|c| c == "circle_r").unwrap();
+    let mut radii: Vec<f64> = rows[1..]
+        .iter()
+        .map(|row| row[r].parse().unwrap())
+        .collect();
+    radii.sort_by(f64::total_cmp);
+    assert!(
+        (radii[0] - 40.0).abs() < 0.01 && (radii[1] - 45.0).abs() < 0.01,
+        "{radii:?}"
+    );
 }

@@ -73,3 +73,40 @@ fn speed_bench_writes_its_report() {
     }
     assert_eq!(process, cases);
 }
+
+/// `vicurve bench objects` on its small image (`--quick`), one repeat: the
+/// report and the CSV exist and say what they measured; every circle was
+/// found and measured. No timing is checked.
+#[test]
+fn objects_bench_writes_its_report() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("objects");
+    let work = dir.path().join("work");
+    let (out_text, work_text) = (out.display().to_string(), work.display().to_string());
+    let run = vicurve(&[
+        "bench",
+        "objects",
+        "--quick",
+        "--repeats",
+        "1",
+        "--out",
+        &out_text,
+        "--work",
+        &work_text,
+    ]);
+    ok(&run);
+    assert!(text(&run.stdout).contains("16 of 16 circles found and measured"));
+    assert!(work.join("circles.png").is_file());
+    let md = std::fs::read_to_string(out.join("objects-speed.md")).expect("objects-speed.md");
+    for part in [
+        "## Times",
+        "## Where the time goes",
+        "pixel edge",
+        "16 of 16 circles",
+    ] {
+        assert!(md.contains(part), "{part} not in objects-speed.md");
+    }
+    let csv = std::fs::read_to_string(out.join("objects-speed.csv")).expect("csv");
+    assert!(csv.starts_with("quantity,median_s,min_s,max_s\n\"whole process\","));
+    assert!(csv.contains("stage,objects,iterations,rereferences,seconds"));
+}

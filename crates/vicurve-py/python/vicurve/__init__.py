@@ -98,7 +98,9 @@ def measure_all(image, **kwargs):
     measured at all), numbered row-major by centroid; ``table`` one row per
     object: a pandas DataFrame when pandas is installed, else a dict of
     NumPy arrays. Keywords: ``polarity``, ``model``, ``min_length``,
-    ``min_area``, ``roi``, ``include_border`` (see ``_vicurve.measure_all``).
+    ``min_area``, ``roi``, ``include_border``, ``holes``, ``kind``
+    (``"contour"``: every line), ``min_strength`` (see
+    ``_vicurve.measure_all``).
     """
     import numpy as np
 

@@ -201,6 +201,9 @@ def measure_all(
     min_area: Optional[float] = None,
     roi: Optional[Tuple[float, float, float, float]] = None,
     include_border: bool = False,
+    holes: bool = False,
+    kind: str = "silhouette",
+    min_strength: Optional[float] = None,
 ) -> Tuple[List[Optional[Result]], Dict[str, Any]]:
     """Every object of ``image``: one ``Result`` (or None) per object and
     the table as a dict of NumPy arrays (``vicurve.measure_all`` makes it a

@@ -1,7 +1,7 @@
 //! Files written so that a reader never sees a part of one: the samples
 //! CSV of a measurement, and any file written through a temporary name.
 
-use crate::fit::Measurement;
+use crate::fit::{Measurement, Sample};
 use std::io::Write;
 use std::path::Path;
 
@@ -18,24 +18,30 @@ pub fn write_points_csv(path: &Path, m: &Measurement) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let file = std::fs::File::create(path).map_err(err)?;
     let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "s,x,y,nx,ny,sigma,weight,sigma_noise,misfit").map_err(err)?;
+    writeln!(w, "{SAMPLE_COLUMNS}").map_err(err)?;
     for s in &m.samples {
-        writeln!(
-            w,
-            "{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3},{:.3e},{}",
-            s.s,
-            s.x,
-            s.y,
-            s.nx,
-            s.ny,
-            s.sigma,
-            s.weight,
-            s.sigma_noise,
-            u8::from(s.misfit)
-        )
-        .map_err(err)?;
+        writeln!(w, "{}", sample_row(s)).map_err(err)?;
     }
     w.flush().map_err(err)
+}
+
+/// The columns of a sample row ([`write_points_csv`]).
+pub const SAMPLE_COLUMNS: &str = "s,x,y,nx,ny,sigma,weight,sigma_noise,misfit";
+
+/// One sample as a CSV row of [`SAMPLE_COLUMNS`].
+pub fn sample_row(s: &Sample) -> String {
+    format!(
+        "{:.6},{:.6},{:.6},{:.6},{:.6},{:.3e},{:.3},{:.3e},{}",
+        s.s,
+        s.x,
+        s.y,
+        s.nx,
+        s.ny,
+        s.sigma,
+        s.weight,
+        s.sigma_noise,
+        u8::from(s.misfit)
+    )
 }
 
 /// The temporary name [`write_atomic`] writes `path` to first:

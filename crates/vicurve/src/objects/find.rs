@@ -2,11 +2,11 @@
 //! its traced boundary and the gap to its nearest neighbour.
 
 use super::{order, AllConfig, ObjectPolarity, RegionInfo, MIN_CONTRAST_TO_NOISE};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::fit::default_stages;
 use crate::image::Image;
-use crate::start::threshold::{self, Rect};
-use crate::start::{boundary, edge_score, region, search_rect};
+use crate::start::threshold::Rect;
+use crate::start::{boundary, edge_score, region, Labelled};
 use serde::{Deserialize, Serialize};
 
 /// How far (px) from an object's edge other regions are looked for: the
@@ -35,6 +35,9 @@ pub struct Candidate {
     pub rect: Rect,
     /// Whether the object is above the threshold.
     pub bright: bool,
+    /// Pixels of the regions inside it (its holes and what they hold): its
+    /// outer boundary encloses `region.pixels + enclosed` pixels.
+    pub enclosed: usize,
 }
 
 /// What the search found, and what it left out.
@@ -60,26 +63,53 @@ pub struct Found {
     pub faint: usize,
     /// Left out because cut by the border.
     pub border: usize,
+    /// Holes measured as objects ([`AllConfig::holes`]).
+    #[serde(default)]
+    pub holes: usize,
 }
 
 /// Find the objects of `image` (module docs of [`super`]).
 ///
-/// Errors: [`Error::InvalidParameter`] for a bad region of interest,
-/// [`Error::NoSilhouette`] for a rectangle without contrast.
+/// Errors: [`crate::Error::InvalidParameter`] for a bad region of interest,
+/// [`crate::Error::NoSilhouette`] for a rectangle without contrast.
 pub fn find_objects(image: &Image, config: &AllConfig) -> Result<Found> {
-    let rect = search_rect(image, config.roi)?;
-    let (w, h) = (rect.width(), rect.height());
-    let values = threshold::smoothed(image, rect);
-    let t = threshold::otsu(&values).ok_or_else(|| Error::NoSilhouette {
-        reason: "the image (or region of interest) has no contrast".into(),
-    })?;
-    let above: Vec<bool> = values.iter().map(|&v| v > t).collect();
+    let lab = Labelled::new(image, config.roi)?;
     let bright = match config.polarity {
         ObjectPolarity::Bright => true,
         ObjectPolarity::Dark => false,
-        ObjectPolarity::Auto => 2 * above.iter().filter(|&&a| a).count() < above.len(),
+        ObjectPolarity::Auto => 2 * lab.above.iter().filter(|&&a| a).count() < lab.above.len(),
     };
-    let (labels, regions) = region::label(&above, w, h);
+    let (min_length, min_area) = limits(config);
+    let mut found = Found {
+        candidates: Vec::new(),
+        threshold: lab.threshold,
+        bright,
+        noise: noise_sigma(image, lab.rect),
+        min_length,
+        min_area,
+        small: 0,
+        faint: 0,
+        border: 0,
+        holes: 0,
+    };
+    let parents = enclosing(&lab);
+    let objects = select(&lab, &mut found, config.include_border, |r| {
+        r.bright == bright
+    });
+    let mut holes = Vec::new();
+    if config.holes {
+        let is_object = |l: Option<u32>| l.is_some_and(|l| objects.iter().any(|o| o.0 == l));
+        holes = select(&lab, &mut found, false, |r| {
+            r.bright != bright && is_object(parents[r.label as usize])
+        });
+        found.holes = holes.len();
+    }
+    found.candidates = number(&lab, &parents, &objects, &holes);
+    Ok(found)
+}
+
+/// The default least boundary length and area (see [`AllConfig`]).
+fn limits(config: &AllConfig) -> (f64, f64) {
     let r_last = config
         .fit
         .stages
@@ -93,58 +123,116 @@ pub fn find_objects(image: &Image, config: &AllConfig) -> Result<Found> {
     let min_area = config
         .min_area
         .unwrap_or(std::f64::consts::PI * (2.0 * r_last).powi(2));
-    let noise = noise_sigma(image, rect);
-    let mut found = Found {
-        candidates: Vec::new(),
-        threshold: t,
-        bright,
-        noise,
-        min_length,
-        min_area,
-        small: 0,
-        faint: 0,
-        border: 0,
-    };
+    (min_length, min_area)
+}
+
+/// The regions `wanted` that are large, long and contrasted enough, and
+/// not cut by the border unless `include_border`, with their traced
+/// boundaries; those left out counted in `found`.
+fn select(
+    lab: &Labelled,
+    found: &mut Found,
+    include_border: bool,
+    wanted: impl Fn(&region::Region) -> bool,
+) -> Vec<(u32, Vec<(usize, usize)>)> {
+    let (w, h) = (lab.rect.width(), lab.rect.height());
     let mut kept = Vec::new();
-    for r in regions.iter().filter(|r| r.bright == bright) {
-        if (r.pixels as f64) < min_area {
+    for r in lab.regions.iter().filter(|r| wanted(r)) {
+        if (r.pixels as f64) < found.min_area {
             found.small += 1;
             continue;
         }
-        let chain = boundary::trace(&labels, w, h, r.label, r.first);
-        if (chain.len() as f64) < min_length {
+        let chain = boundary::trace(&lab.labels, w, h, r.label, r.first);
+        if (chain.len() as f64) < found.min_length {
             found.small += 1;
             continue;
         }
-        if edge_score(&chain, &values, w, h) / (chain.len() as f64) < MIN_CONTRAST_TO_NOISE * noise
-        {
+        let contrast = edge_score(&chain, &lab.values, w, h) / (chain.len() as f64);
+        if contrast < MIN_CONTRAST_TO_NOISE * found.noise {
             found.faint += 1;
             continue;
         }
-        if r.touches_border && !config.include_border {
+        if r.touches_border && !include_border {
             found.border += 1;
             continue;
         }
         kept.push((r.label, chain));
     }
-    let infos: Vec<RegionInfo> = kept
+    kept
+}
+
+/// The label of the region enclosing each region (the one left of its
+/// first pixel); `None` for a region cut by the border.
+fn enclosing(lab: &Labelled) -> Vec<Option<u32>> {
+    let w = lab.rect.width();
+    lab.regions
         .iter()
-        .map(|(label, chain)| region_info(&labels, &regions, rect, *label, chain))
-        .collect();
-    let ids = order::row_major(&infos);
-    let mut by_label = vec![None; regions.len()];
-    for (k, (label, _)) in kept.iter().enumerate() {
+        .map(|r| {
+            let (i, j) = r.first;
+            (!r.touches_border && i > 0).then(|| lab.labels[j * w + i - 1])
+        })
+        .collect()
+}
+
+/// The pixels of the regions inside each region (enclosed, directly or
+/// not), by label.
+fn enclosed_pixels(lab: &Labelled, parents: &[Option<u32>]) -> Vec<usize> {
+    let mut inside = vec![0; lab.regions.len()];
+    for r in &lab.regions {
+        let mut up = parents[r.label as usize];
+        while let Some(p) = up {
+            inside[p as usize] += r.pixels;
+            up = parents[p as usize];
+        }
+    }
+    inside
+}
+
+/// The candidates of `objects` (numbered row-major) and of `holes`
+/// (numbered after them, by enclosing object, then row-major), each with
+/// its gap and nearest neighbour.
+fn number(
+    lab: &Labelled,
+    parents: &[Option<u32>],
+    objects: &[(u32, Vec<(usize, usize)>)],
+    holes: &[(u32, Vec<(usize, usize)>)],
+) -> Vec<Candidate> {
+    let rect = lab.rect;
+    let info = |(label, chain): &(u32, Vec<(usize, usize)>)| {
+        region_info(&lab.labels, &lab.regions, rect, *label, chain)
+    };
+    let object_infos: Vec<RegionInfo> = objects.iter().map(info).collect();
+    let mut ids = order::row_major(&object_infos);
+    let mut by_label = vec![None; lab.regions.len()];
+    for (k, (label, _)) in objects.iter().enumerate() {
         by_label[*label as usize] = Some(ids[k]);
     }
-    let mut candidates: Vec<Candidate> = kept
+    let mut hole_infos: Vec<RegionInfo> = holes.iter().map(info).collect();
+    for (k, (label, _)) in holes.iter().enumerate() {
+        hole_infos[k].parent = parents[*label as usize].and_then(|p| by_label[p as usize]);
+    }
+    let within = order::row_major(&hole_infos);
+    let mut hole_order: Vec<usize> = (0..holes.len()).collect();
+    hole_order.sort_by_key(|&k| (hole_infos[k].parent, within[k]));
+    let mut hole_ids = vec![0; holes.len()];
+    for (n, &k) in hole_order.iter().enumerate() {
+        hole_ids[k] = objects.len() + n;
+        by_label[holes[k].0 as usize] = Some(objects.len() + n);
+    }
+    ids.extend(hole_ids);
+    let enclosed = enclosed_pixels(lab, parents);
+    let mut candidates: Vec<Candidate> = objects
         .iter()
-        .zip(infos)
-        .enumerate()
-        .map(|(k, ((label, chain), mut info))| {
-            let (gap, other) = nearest_other(&labels, &regions, w, h, *label, chain);
+        .chain(holes)
+        .zip(object_infos.into_iter().chain(hole_infos))
+        .zip(ids)
+        .map(|((item, mut info), id)| {
+            let (label, chain) = item;
+            let (gap, other) = nearest_other(lab, parents, *label, chain);
             info.gap = gap;
             Candidate {
-                id: ids[k],
+                id,
+                bright: lab.regions[*label as usize].bright,
                 region: info,
                 chain: chain
                     .iter()
@@ -152,13 +240,12 @@ pub fn find_objects(image: &Image, config: &AllConfig) -> Result<Found> {
                     .collect(),
                 neighbour: other.and_then(|l| by_label[l as usize]),
                 rect,
-                bright,
+                enclosed: enclosed[*label as usize],
             }
         })
         .collect();
     candidates.sort_by_key(|c| c.id);
-    found.candidates = candidates;
-    Ok(found)
+    candidates
 }
 
 /// Centroid, bounding box and size of the region `label` (its pixels in
@@ -172,10 +259,7 @@ fn region_info(
 ) -> RegionInfo {
     let w = rect.width();
     let (mut sx, mut sy, mut n) = (0.0, 0.0, 0usize);
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-    for &(i, j) in chain {
-        (x0, y0, x1, y1) = (x0.min(i), y0.min(j), x1.max(i), y1.max(j));
-    }
+    let [x0, y0, x1, y1] = chain_bbox(chain);
     for j in y0..=y1 {
         for i in x0..=x1 {
             if labels[j * w + i] == label {
@@ -196,39 +280,46 @@ fn region_info(
         bbox: [rect.x0 + x0, rect.y0 + y0, rect.x0 + x1, rect.y0 + y1],
         touches_border: r.touches_border,
         gap: f64::INFINITY,
+        parent: None,
     }
 }
 
+/// The bounding box `[x0, y0, x1, y1]` of `chain` (inclusive; empty,
+/// `x0 > x1`, for an empty chain).
+fn chain_bbox(chain: &[(usize, usize)]) -> [usize; 4] {
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for &(i, j) in chain {
+        (x0, y0, x1, y1) = (x0.min(i), y0.min(j), x1.max(i), y1.max(j));
+    }
+    [x0, y0, x1, y1]
+}
+
 /// The gap (px) from the boundary `chain` of region `own` to the nearest
-/// pixel of another region of the same phase (of at least
-/// `NEIGHBOUR_MIN_PIXELS` pixels) within [`GAP_REACH`], and that region's
-/// label: the distance between pixel centres less one pixel (each
-/// thresholded edge lies about half a pixel beyond its boundary pixel).
-/// Infinite when there is none.
+/// pixel of another edge within [`GAP_REACH`]: another region of the same
+/// phase, or a region inside `own` (a hole of an object, an island of a
+/// hole), of at least `NEIGHBOUR_MIN_PIXELS` pixels; and that region's
+/// label. The gap is the distance between pixel centres less one pixel
+/// (each thresholded edge lies about half a pixel beyond its boundary
+/// pixel); infinite when there is none.
+///
+/// Only the other regions' boundary pixels in the chain's bounding box
+/// widened by the reach are compared ([`near_boundaries`]): a region's
+/// pixel nearest to a point outside it is always on its boundary.
 fn nearest_other(
-    labels: &[u32],
-    regions: &[region::Region],
-    w: usize,
-    h: usize,
+    lab: &Labelled,
+    parents: &[Option<u32>],
     own: u32,
     chain: &[(usize, usize)],
 ) -> (f64, Option<u32>) {
-    let bright = regions[own as usize].bright;
     let reach = GAP_REACH as i64;
+    let others = near_boundaries(lab, parents, own, chain);
     let mut best = (i64::MAX, None);
     for &(i, j) in chain {
         let (i, j) = (i as i64, j as i64);
-        for y in (j - reach).max(0)..=(j + reach).min(h as i64 - 1) {
-            for x in (i - reach).max(0)..=(i + reach).min(w as i64 - 1) {
-                let d2 = (x - i).pow(2) + (y - j).pow(2);
-                if d2 >= best.0 || d2 > reach * reach {
-                    continue;
-                }
-                let l = labels[y as usize * w + x as usize];
-                let r = &regions[l as usize];
-                if l != own && r.bright == bright && r.pixels >= NEIGHBOUR_MIN_PIXELS {
-                    best = (d2, Some(l));
-                }
+        for &(x, y, l) in &others {
+            let d2 = (x - i).pow(2) + (y - j).pow(2);
+            if d2 < best.0 && d2 <= reach * reach {
+                best = (d2, Some(l));
             }
         }
     }
@@ -236,6 +327,45 @@ fn nearest_other(
         (d2, Some(l)) => ((d2 as f64).sqrt() - 1.0, Some(l)),
         _ => (f64::INFINITY, None),
     }
+}
+
+/// The boundary pixels `(x, y, label)` (a 4-neighbour of another label, or
+/// on the rectangle's edge), in raster order, of the other edges of `own`
+/// (see [`nearest_other`]) within [`GAP_REACH`] of the bounding box of
+/// `chain`.
+fn near_boundaries(
+    lab: &Labelled,
+    parents: &[Option<u32>],
+    own: u32,
+    chain: &[(usize, usize)],
+) -> Vec<(i64, i64, u32)> {
+    let (w, h) = (lab.rect.width(), lab.rect.height());
+    let labels = &lab.labels;
+    let bright = lab.regions[own as usize].bright;
+    let other = |l: u32| {
+        let r = &lab.regions[l as usize];
+        let edge = (l != own && r.bright == bright) || parents[l as usize] == Some(own);
+        edge && r.pixels >= NEIGHBOUR_MIN_PIXELS
+    };
+    let [x0, y0, x1, y1] = chain_bbox(chain);
+    let (x0, y0) = (x0.saturating_sub(GAP_REACH), y0.saturating_sub(GAP_REACH));
+    let (x1, y1) = ((x1 + GAP_REACH).min(w - 1), (y1 + GAP_REACH).min(h - 1));
+    let mut out = Vec::new();
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let k = y * w + x;
+            let l = labels[k];
+            if !other(l) {
+                continue;
+            }
+            let edge = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+            let differs = |k: usize| labels[k] != l;
+            if edge || differs(k - 1) || differs(k + 1) || differs(k - w) || differs(k + w) {
+                out.push((x as i64, y as i64, l));
+            }
+        }
+    }
+    out
 }
 
 /// The noise's standard deviation in `rect` of `image`, gray levels: the

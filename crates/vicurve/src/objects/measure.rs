@@ -2,13 +2,15 @@
 //! neighbours, every way it can fail recorded.
 
 use super::find::{Candidate, GAP_REACH};
-use super::{AllConfig, ObjectFailure, ObjectResult};
+use super::{AllConfig, ObjectFailure, ObjectResult, RegionInfo};
 use crate::curve::InitialCurve;
 use crate::derived::closed_measures;
 use crate::fit::{
-    default_stages, measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage,
+    breaks, default_stages, measure_from, Elements, FitConfig, Measurement, Outcome, Polarity,
+    Stage,
 };
 use crate::image::Image;
+use crate::interp::Sampler;
 use crate::model::measure_model;
 use crate::start::{free_run, smooth, MIN_BOUNDARY};
 
@@ -22,19 +24,16 @@ const BAND_MARGIN: f64 = 3.0;
 /// contrast, whichever is larger) this many times does not fit.
 const MISFIT_RATIO: f64 = 2.0;
 
-/// Measure `c` (module docs of [`super`]); never fails: a failure is
-/// recorded in the result.
-pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> ObjectResult {
-    let mut out = ObjectResult {
-        id: c.id,
-        region: c.region.clone(),
-        start: None,
-        config: config.fit.clone(),
-        measurement: None,
-        closed: None,
-        model: None,
-        failure: None,
-    };
+/// Measure `c` (module docs of [`super`]) in `image`, prepared once for
+/// every object as `sampler` (of `config.fit.interpolation`); never fails:
+/// a failure is recorded in the result.
+pub(crate) fn measure_one(
+    image: &Image,
+    sampler: &Sampler,
+    c: &Candidate,
+    config: &AllConfig,
+) -> ObjectResult {
+    let mut out = unmeasured(c.id, &c.region, config);
     let start = match start_curve(c) {
         Ok(s) => s,
         Err(message) => {
@@ -42,8 +41,49 @@ pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> O
             return out;
         }
     };
+    let mut base = config.fit.clone();
+    if start.is_closed() && base.polarity == Polarity::Auto && !c.region.touches_border {
+        base.polarity = if c.bright {
+            Polarity::Positive
+        } else {
+            Polarity::Negative
+        };
+    }
+    let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
+    let fit = capped_config(&c.region, c.neighbour, &base, radius);
+    measure_from_start(image, sampler, out, start, fit, config, |m| {
+        check_curve(c, m)
+    })
+}
+
+/// A result for the object `id` of `region` not measured yet.
+pub(crate) fn unmeasured(id: usize, region: &RegionInfo, config: &AllConfig) -> ObjectResult {
+    ObjectResult {
+        id,
+        region: region.clone(),
+        start: None,
+        config: config.fit.clone(),
+        measurement: None,
+        closed: None,
+        model: None,
+        failure: None,
+    }
+}
+
+/// Measure `out`'s object from `start` with `fit` (or record why its
+/// configuration failed), `check` the measurement, then fit the model of
+/// `config` if any; never fails.
+pub(crate) fn measure_from_start(
+    image: &Image,
+    sampler: &Sampler,
+    mut out: ObjectResult,
+    start: InitialCurve,
+    fit: Result<FitConfig, ObjectFailure>,
+    config: &AllConfig,
+    check: impl Fn(&Measurement) -> Option<ObjectFailure>,
+) -> ObjectResult {
     out.start = Some(start.clone());
-    let fit = match capped_config(c, &config.fit, start.is_closed()) {
+    let fit = match fit {
         Ok(f) => f,
         Err(f) => {
             out.failure = Some(f);
@@ -51,7 +91,9 @@ pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> O
         }
     };
     out.config = fit.clone();
-    let m = match measure(image, &start, &fit) {
+    let m = match breaks::initial_curve(&start, &fit.breaks)
+        .and_then(|reference| measure_from(sampler, reference, &fit))
+    {
         Ok(m) => m,
         Err(e) => {
             out.failure = Some(ObjectFailure::Measure {
@@ -60,7 +102,7 @@ pub(crate) fn measure_one(image: &Image, c: &Candidate, config: &AllConfig) -> O
             return out;
         }
     };
-    out.failure = check_curve(c, &m);
+    out.failure = diverged(&m).or_else(|| check(&m));
     if m.curve.is_closed() {
         out.closed = closed_measures(&m).ok();
     }
@@ -110,29 +152,21 @@ fn start_curve(c: &Candidate) -> Result<InitialCurve, String> {
     })
 }
 
-/// The fit's configuration for `c`: its polarity set from the region (a
-/// closed curve), and, when another region lies within [`GAP_REACH`], the
-/// stages whose band would reach it left out (with the default schedule's
-/// rule that a coarse band wider than half the object's radius is
-/// skipped). Errors: [`ObjectFailure::TooClose`].
-fn capped_config(
-    c: &Candidate,
+/// The fit's configuration for an object of `region` (its neighbour's id
+/// `neighbour`) from `base`: when another edge lies within [`GAP_REACH`],
+/// the stages whose band would reach it left out (with the default
+/// schedule's rule that a coarse band wider than half the object's
+/// `radius`, px, is skipped). Errors: [`ObjectFailure::TooClose`].
+pub(crate) fn capped_config(
+    region: &RegionInfo,
+    neighbour: Option<usize>,
     base: &FitConfig,
-    closed: bool,
+    radius: f64,
 ) -> Result<FitConfig, ObjectFailure> {
     let mut fit = base.clone();
-    if closed && fit.polarity == Polarity::Auto {
-        fit.polarity = if c.region.touches_border {
-            Polarity::Auto
-        } else if c.bright {
-            Polarity::Positive
-        } else {
-            Polarity::Negative
-        };
-    }
-    let gap = c.region.gap;
+    let gap = region.gap;
     let too_close = || ObjectFailure::TooClose {
-        neighbour: c.neighbour,
+        neighbour,
         gap,
         needed: MIN_GAP,
     };
@@ -143,7 +177,6 @@ fn capped_config(
         return Ok(fit);
     }
     let cap = gap - BAND_MARGIN;
-    let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
     let all = fit.stages.clone().unwrap_or_else(default_stages);
     let n = all.len();
     let mut kept: Vec<Stage> = all
@@ -168,13 +201,18 @@ fn capped_config(
     Ok(fit)
 }
 
-/// A diverged fit, or a closed curve whose area is far from its region's
+/// A diverged fit.
+fn diverged(m: &Measurement) -> Option<ObjectFailure> {
+    match m.outcome {
+        Outcome::Diverged { divergence } => Some(ObjectFailure::Diverged { divergence }),
+        _ => None,
+    }
+}
+
+/// A closed curve whose area is far from its region's with its holes
 /// (more than one pixel all round: it ran to another edge).
 fn check_curve(c: &Candidate, m: &Measurement) -> Option<ObjectFailure> {
-    if let Outcome::Diverged { divergence } = m.outcome {
-        return Some(ObjectFailure::Diverged { divergence });
-    }
-    let region = c.region.pixels as f64;
+    let region = (c.region.pixels + c.enclosed) as f64;
     match m.area() {
         Some(a) if (a.abs() - region).abs() > c.region.boundary as f64 => {
             Some(ObjectFailure::Wandered {

@@ -10,15 +10,28 @@
 //!    contrasted enough (mean edge gradient at least
 //!    [`MIN_CONTRAST_TO_NOISE`] times the image noise). Regions cut by the
 //!    rectangle's border are skipped unless [`AllConfig::include_border`].
+//!    With [`AllConfig::holes`], the regions of the other phase inside an
+//!    object that pass the same tests are objects too, of the opposite
+//!    polarity (numbered after the objects, each with its `parent`).
 //! 2. [`order`]: objects are numbered row-major by centroid (rows grouped
 //!    by half the median object size), so that two images of the same
 //!    scene number them alike.
-//! 3. [`measure_one`](measure): each object's band is kept off its
+//! 3. `measure_one` (`measure.rs`): each object's band is kept off its
 //!    neighbours (the stages' half-widths are capped by the gap to the
-//!    nearest other region); an object too close to another to be
+//!    nearest other edge: another region of its phase, or one inside it);
+//!    an object too close to another to be
 //!    measured, a fit that diverges, loops or runs away from its region,
 //!    or a shape model that does not fit, is recorded as failed with its
 //!    reason ([`ObjectFailure`]); the other objects are unaffected.
+//!
+//! # Lines
+//!
+//! With `fit.kind` contour, the objects are the image's lines instead:
+//! every ridge (bright line) or valley (dark line) whose strength is at
+//! least [`AllConfig::min_strength`], followed from its strongest pixel
+//! and measured from the followed polyline (`lines.rs`: the strength
+//! map, the following, the gaps between lines). A line that runs to
+//! another is recorded as [`ObjectFailure::Strayed`].
 //!
 //! ```
 //! use vicurve::objects::{measure_all, AllConfig};
@@ -36,6 +49,7 @@
 
 pub mod find;
 pub mod grid;
+mod lines;
 mod measure;
 pub mod order;
 pub mod table;
@@ -49,6 +63,7 @@ use crate::derived::ClosedMeasures;
 use crate::error::{Error, Result};
 use crate::fit::{Divergence, FitConfig, Measurement};
 use crate::image::Image;
+use crate::interp::Sampler;
 use crate::model::{ModelConfig, ModelFit, ShapeModel};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -86,12 +101,12 @@ impl std::fmt::Display for ObjectPolarity {
 impl std::str::FromStr for ObjectPolarity {
     type Err = Error;
     /// `auto`, `bright` or `dark` (also `bright-inside`, `dark-inside`,
-    /// the fit's names of the same polarities).
+    /// `bright-line`, `dark-line`, the fit's names of the same polarities).
     fn from_str(s: &str) -> Result<Self> {
         match s.trim() {
             "auto" => Ok(ObjectPolarity::Auto),
-            "bright" | "bright-inside" => Ok(ObjectPolarity::Bright),
-            "dark" | "dark-inside" => Ok(ObjectPolarity::Dark),
+            "bright" | "bright-inside" | "bright-line" => Ok(ObjectPolarity::Bright),
+            "dark" | "dark-inside" | "dark-line" => Ok(ObjectPolarity::Dark),
             other => Err(Error::invalid(
                 "polarity",
                 format!("'{other}' (expected auto, bright or dark)"),
@@ -121,6 +136,16 @@ pub struct AllConfig {
     /// Measure objects cut by the rectangle's border, as open curves along
     /// their visible edge. Default: false (they are skipped).
     pub include_border: bool,
+    /// Also measure the holes inside the objects, as objects of the
+    /// opposite polarity (regions of the other phase enclosed by an object,
+    /// with the same least length, area and contrast), numbered after the
+    /// objects. Default: false.
+    pub holes: bool,
+    /// Lines (`fit.kind` contour): the least line strength `s^2 |lambda|`
+    /// (gray levels; module docs, "Lines") a line is followed from.
+    /// Default (`None`): 8 times the strength's noise, and at least a tenth
+    /// of the strongest line's.
+    pub min_strength: Option<f64>,
     /// The shape model fitted to every object. Default: none.
     pub model: Option<ShapeModel>,
     /// The B-spline measurement's settings (its stages are capped per
@@ -138,6 +163,8 @@ impl Default for AllConfig {
             min_area: None,
             roi: None,
             include_border: false,
+            holes: false,
+            min_strength: None,
             model: None,
             fit: FitConfig::default(),
             model_config: ModelConfig::default(),
@@ -148,7 +175,11 @@ impl Default for AllConfig {
 impl AllConfig {
     /// Check the fields. Errors: [`Error::InvalidParameter`].
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [("min_length", self.min_length), ("min_area", self.min_area)] {
+        for (name, v) in [
+            ("min_length", self.min_length),
+            ("min_area", self.min_area),
+            ("min_strength", self.min_strength),
+        ] {
             if let Some(v) = v {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(Error::invalid(name, format!("{v}: must be >= 0")));
@@ -206,8 +237,15 @@ pub enum ObjectFailure {
     Wandered {
         /// Area inside the measured curve, px^2.
         measured: f64,
-        /// Pixels of the thresholded region.
+        /// Pixels of the thresholded region and of its holes.
         region: f64,
+    },
+    /// A measured line ran away from the line it was followed along (to
+    /// another line).
+    #[error("the measured line lies {distance:.2} px (RMS) from the followed line: it ran to another line")]
+    Strayed {
+        /// RMS distance of its samples to the followed polyline, px.
+        distance: f64,
     },
     /// The shape model could not be fitted.
     #[error("the model fit failed: {message}")]
@@ -239,9 +277,12 @@ pub struct RegionInfo {
     pub bbox: [usize; 4],
     /// Whether it is cut by the search rectangle's border.
     pub touches_border: bool,
-    /// Gap to the nearest other region of the same phase, px (infinite
-    /// beyond the search reach).
+    /// Gap to the nearest other edge (a region of the same phase, or one
+    /// inside this one), px (infinite beyond the search reach).
     pub gap: f64,
+    /// For a hole: the id of the object it is inside.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<usize>,
 }
 
 /// One object: where it was found, its start, and its measurement or why
@@ -302,11 +343,16 @@ impl AllResult {
 /// object's own failure is in its [`ObjectResult::failure`].
 pub fn measure_all(image: &Image, config: &AllConfig) -> Result<AllResult> {
     config.validate()?;
+    if config.fit.kind == crate::virtual_image::Kind::Contour {
+        return lines::measure_all_lines(image, config);
+    }
     let found = find::find_objects(image, config)?;
+    // The image's interpolant, prepared once for every object.
+    let sampler = Sampler::new(image, config.fit.interpolation);
     let objects = found
         .candidates
         .par_iter()
-        .map(|c| measure::measure_one(image, c, config))
+        .map(|c| measure::measure_one(image, &sampler, c, config))
         .collect();
     Ok(AllResult { objects, found })
 }

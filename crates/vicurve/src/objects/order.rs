@@ -53,6 +53,7 @@ mod tests {
             bbox: [0, 0, 10, 10],
             touches_border: false,
             gap: f64::INFINITY,
+            parent: None,
         }
     }
 

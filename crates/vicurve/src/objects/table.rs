@@ -27,6 +27,9 @@ fn row(o: &ObjectResult) -> Vec<(String, f64)> {
     put("region_x", o.region.centroid[0]);
     put("region_y", o.region.centroid[1]);
     put("region_pixels", o.region.pixels as f64);
+    if let Some(p) = o.region.parent {
+        put("parent", p as f64);
+    }
     put("area", c.map_or(nan, |c| c.area));
     put(
         "equivalent_diameter",

@@ -4,7 +4,8 @@
 //! known smooth strain field.
 //!
 //! Every shape is painted by the exact coverage of its dense polygon
-//! ([`super::shapes`]); the shapes do not overlap, so the image is exact
+//! ([`super::shapes`]); the shapes do not overlap (a hole lies wholly
+//! inside its object, drawn the other way round), so the image is exact
 //! everywhere. Then blur, noise and quantisation as [`super::render`].
 
 use super::{blur, coverage, noise, shapes, Method, RenderSpec};
@@ -26,6 +27,9 @@ pub enum Role {
     Border,
     /// One of a pair that touch: to be reported as failed.
     Touching,
+    /// A hole inside an object (the background's level inside its shape):
+    /// an object of the opposite polarity with `--holes`.
+    Hole,
 }
 
 /// One shape of a scene.
@@ -87,7 +91,12 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
             ..RenderSpec::default()
         };
         spec.validate()?;
-        rings.extend(shapes::region_rings(&spec)?);
+        let mut these = shapes::region_rings(&spec)?;
+        if item.role == Role::Hole {
+            // Drawn the other way round: the coverage subtracts it.
+            these.iter_mut().for_each(|r| r.reverse());
+        }
+        rings.extend(these);
     }
     let (fg, bg) = (scene.foreground, scene.background);
     let mut cov = coverage::polygon_coverage(scene.width, scene.height, &rings)?;
@@ -239,55 +248,18 @@ pub fn random_scene(
             )
         })?;
     }
-    Ok(Scene {
-        width,
-        height,
-        items,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed,
-        bits: Some(8),
-        d0: None,
-    })
+    Ok(scene_of(width, height, items, seed, None))
 }
 
-/// A `rows x cols` grid of circles of diameter `d0` px, `pitch` px apart
-/// before deformation, each deformed by the local deformation gradient of
-/// a smooth field (so each becomes an exact ellipse): at the node's
-/// position `(u, v)` in `[0, 1]^2` across the grid, principal stretches
-/// `1 + 0.3 u` and `0.85 + 0.1 v`, major axis at `0.3 + 0.5 (u - v)` rad.
-/// The exact strains are in each item's `strain`. The grid is centred in
-/// an image `pitch` px wider than it on each side.
-pub fn strained_grid(rows: usize, cols: usize, d0: f64, pitch: f64, seed: u64) -> Scene {
-    let mut rng = Rng::new(seed ^ 0x671d);
-    let width = ((cols as f64 + 1.0) * pitch).ceil() as usize;
-    let height = ((rows as f64 + 1.0) * pitch).ceil() as usize;
-    let mut items = Vec::new();
-    for i in 0..rows {
-        for j in 0..cols {
-            let u = j as f64 / (cols.max(2) - 1) as f64;
-            let v = i as f64 / (rows.max(2) - 1) as f64;
-            let (l1, l2) = (1.0 + 0.3 * u, 0.85 + 0.1 * v);
-            let angle = 0.3 + 0.5 * (u - v);
-            // Off-grid centres: sub-pixel positions vary from circle to circle.
-            let jitter = |rng: &mut Rng| rng.uniform() - 0.5;
-            let cx = (j as f64 + 1.0) * pitch + jitter(&mut rng);
-            let cy = (i as f64 + 1.0) * pitch + jitter(&mut rng);
-            items.push(SceneItem {
-                shape: Shape::Ellipse {
-                    cx,
-                    cy,
-                    a: 0.5 * d0 * l1,
-                    b: 0.5 * d0 * l2,
-                    angle,
-                },
-                role: Role::Object,
-                strain: Some([l1.ln(), l2.ln(), angle]),
-            });
-        }
-    }
+/// A scene of `items` with the default rendering: 0.8 on 0.2, blur 1 px,
+/// noise 1 % of the contrast, 8 bits.
+fn scene_of(
+    width: usize,
+    height: usize,
+    items: Vec<SceneItem>,
+    seed: u64,
+    d0: Option<f64>,
+) -> Scene {
     Scene {
         width,
         height,
@@ -298,6 +270,130 @@ pub fn strained_grid(rows: usize, cols: usize, d0: f64, pitch: f64, seed: u64) -
         noise: 0.01,
         seed,
         bits: Some(8),
-        d0: Some(d0),
+        d0,
     }
+}
+
+/// Largest principal stretch of [`strained_grid`]'s field.
+const MAX_STRETCH: f64 = 1.3;
+/// Least gap (px) between two circles of a grid: more than twice the
+/// default schedule's last bands, so that each is measured alone.
+const GRID_MIN_GAP: f64 = 12.0;
+
+/// A `rows x cols` grid of circles of diameter `d0` px, `pitch` px apart
+/// before deformation, each deformed by the local deformation gradient of
+/// a smooth field (so each becomes an exact ellipse): at the node's
+/// position `(u, v)` in `[0, 1]^2` across the grid, principal stretches
+/// `1 + 0.3 u` and `0.85 + 0.1 v`, major axis at `0.3 + 0.5 (u - v)` rad.
+/// The exact strains are in each item's `strain`. The grid is centred in
+/// an image `pitch` px wider than it on each side.
+pub fn strained_grid(rows: usize, cols: usize, d0: f64, pitch: f64, seed: u64) -> Scene {
+    let width = ((cols as f64 + 1.0) * pitch).ceil() as usize;
+    let height = ((rows as f64 + 1.0) * pitch).ceil() as usize;
+    let layout = GridLayout {
+        rows,
+        cols,
+        d0,
+        pitch,
+        origin: [0.0, 0.0],
+        strained: true,
+    };
+    grid_scene(width, height, &layout, seed)
+}
+
+/// A `rows x cols` grid of circles of diameter `d0` px in a `width x
+/// height` image: the largest pitch that leaves a pitch of margin on each
+/// side, the grid centred; deformed as in [`strained_grid`] when
+/// `strained`, else circles (strains 0).
+///
+/// Errors: [`Error::InvalidParameter`] when the circles would come closer
+/// than `GRID_MIN_GAP` px (12) to each other: a larger image or smaller
+/// circles.
+pub fn circle_grid(
+    width: usize,
+    height: usize,
+    rows: usize,
+    cols: usize,
+    d0: f64,
+    strained: bool,
+    seed: u64,
+) -> Result<Scene> {
+    let pitch = (width as f64 / (cols as f64 + 1.0)).min(height as f64 / (rows as f64 + 1.0));
+    let reach = d0 * if strained { MAX_STRETCH } else { 1.0 };
+    if !(d0 > 0.0 && rows > 0 && cols > 0) || pitch - reach < GRID_MIN_GAP {
+        return Err(Error::invalid(
+            "size",
+            format!(
+                "a {rows}x{cols} grid of circles of diameter {d0} px in {width}x{height} px puts them {pitch:.1} px apart; at least {:.1} needed (a larger image or smaller circles)",
+                reach + GRID_MIN_GAP
+            ),
+        ));
+    }
+    let origin = [
+        0.5 * (width as f64 - (cols as f64 + 1.0) * pitch),
+        0.5 * (height as f64 - (rows as f64 + 1.0) * pitch),
+    ];
+    let layout = GridLayout {
+        rows,
+        cols,
+        d0,
+        pitch,
+        origin,
+        strained,
+    };
+    Ok(grid_scene(width, height, &layout, seed))
+}
+
+/// Where a grid's circles are: node `(i, j)` at `origin + ((j + 1) pitch,
+/// (i + 1) pitch)`, moved off the pixel grid by up to half a pixel.
+struct GridLayout {
+    rows: usize,
+    cols: usize,
+    d0: f64,
+    pitch: f64,
+    origin: [f64; 2],
+    strained: bool,
+}
+
+/// The scene of `layout` in a `width x height` image (blur 1, noise 1 %,
+/// 8 bits).
+fn grid_scene(width: usize, height: usize, g: &GridLayout, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed ^ 0x671d);
+    let mut items = Vec::new();
+    for i in 0..g.rows {
+        for j in 0..g.cols {
+            let u = j as f64 / (g.cols.max(2) - 1) as f64;
+            let v = i as f64 / (g.rows.max(2) - 1) as f64;
+            let (l1, l2, angle) = if g.strained {
+                (1.0 + 0.3 * u, 0.85 + 0.1 * v, 0.3 + 0.5 * (u - v))
+            } else {
+                (1.0, 1.0, 0.0)
+            };
+            // Off-grid centres: sub-pixel positions vary from circle to circle.
+            let jitter = |rng: &mut Rng| rng.uniform() - 0.5;
+            let cx = g.origin[0] + (j as f64 + 1.0) * g.pitch + jitter(&mut rng);
+            let cy = g.origin[1] + (i as f64 + 1.0) * g.pitch + jitter(&mut rng);
+            let shape = if g.strained {
+                Shape::Ellipse {
+                    cx,
+                    cy,
+                    a: 0.5 * g.d0 * l1,
+                    b: 0.5 * g.d0 * l2,
+                    angle,
+                }
+            } else {
+                Shape::Circle {
+                    cx,
+                    cy,
+                    r: 0.5 * g.d0,
+                }
+            };
+            items.push(SceneItem {
+                shape,
+                role: Role::Object,
+                strain: Some([l1.ln(), l2.ln(), angle]),
+            });
+        }
+    }
+    scene_of(width, height, items, seed, Some(g.d0))
 }

@@ -95,14 +95,15 @@ pub struct AutoStart {
 
 /// Find the silhouette (module docs).
 pub fn find_silhouette(image: &Image, config: &StartConfig) -> Result<AutoStart> {
-    let rect = search_rect(image, config.roi)?;
+    let Labelled {
+        rect,
+        values,
+        threshold: t,
+        labels,
+        regions,
+        ..
+    } = Labelled::new(image, config.roi)?;
     let (w, h) = (rect.width(), rect.height());
-    let values = threshold::smoothed(image, rect);
-    let t = threshold::otsu(&values).ok_or_else(|| Error::NoSilhouette {
-        reason: "the image (or region of interest) has no contrast".into(),
-    })?;
-    let above: Vec<bool> = values.iter().map(|&v| v > t).collect();
-    let (labels, regions) = region::label(&above, w, h);
 
     let chosen = match config.pick {
         Some([x, y]) => {
@@ -161,6 +162,46 @@ pub fn find_silhouette(image: &Image, config: &StartConfig) -> Result<AutoStart>
         bright: chosen.bright,
         region_pixels: chosen.pixels,
     })
+}
+
+/// The search rectangle smoothed, thresholded at Otsu's level and its
+/// regions labelled: steps 1 and 2 of the module docs, shared with
+/// [`crate::objects`].
+pub(crate) struct Labelled {
+    /// The search rectangle.
+    pub rect: Rect,
+    /// Its pixels smoothed ([`threshold::smoothed`]), row-major.
+    pub values: Vec<f64>,
+    /// Otsu's level of `values`, gray levels.
+    pub threshold: f64,
+    /// Whether each pixel of `values` is above the threshold.
+    pub above: Vec<bool>,
+    /// The region label of each pixel ([`region::label`]).
+    pub labels: Vec<u32>,
+    /// The regions, indexed by label.
+    pub regions: Vec<region::Region>,
+}
+
+impl Labelled {
+    /// Of `image` within `roi`. Errors: those of [`search_rect`];
+    /// [`Error::NoSilhouette`] for a rectangle without contrast.
+    pub fn new(image: &Image, roi: Option<[f64; 4]>) -> Result<Labelled> {
+        let rect = search_rect(image, roi)?;
+        let values = threshold::smoothed(image, rect);
+        let t = threshold::otsu(&values).ok_or_else(|| Error::NoSilhouette {
+            reason: "the image (or region of interest) has no contrast".into(),
+        })?;
+        let above: Vec<bool> = values.iter().map(|&v| v > t).collect();
+        let (labels, regions) = region::label(&above, rect.width(), rect.height());
+        Ok(Labelled {
+            rect,
+            values,
+            threshold: t,
+            above,
+            labels,
+            regions,
+        })
+    }
 }
 
 /// The search rectangle of `roi` clipped to the image.

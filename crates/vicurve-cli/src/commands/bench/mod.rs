@@ -3,9 +3,11 @@
 //! study with blur and noise; numbers as CSV, figures as SVG and PNG, and a
 //! report that sets them against the paper's stated figures;
 //! `vicurve bench conformance`, the conformance sweep ([`conformance`]);
-//! and `vicurve bench speed`, the time of one measurement ([`speed`]).
+//! `vicurve bench speed`, the time of one measurement ([`speed`]); and
+//! `vicurve bench objects`, the time of `measure --all` ([`objects`]).
 
 mod conformance;
+mod objects;
 mod paper;
 mod speed;
 
@@ -41,6 +43,11 @@ enum Which {
     /// parts timed in-process, optionally a perf profile and the Python
     /// peers on the same images; write speed.md and speed.csv.
     Speed(speed::SpeedArgs),
+    /// The time of `measure --all` on 100 circles of radius 15 px in a
+    /// 1-megapixel image: whole processes, the parts in-process, each
+    /// stage's time and iterations over the objects; write
+    /// objects-speed.md and objects-speed.csv.
+    Objects(objects::ObjectsArgs),
 }
 
 /// Arguments of `vicurve bench paper`.
@@ -60,6 +67,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         Which::Paper(a) => paper(&a),
         Which::Conformance(a) => conformance::conformance(&a),
         Which::Speed(a) => speed::speed(&a),
+        Which::Objects(a) => objects::objects(&a),
     }
 }
 

@@ -6,12 +6,18 @@
 use crate::args::synth::{check_bits, parse_size, Args, ShapeName};
 use crate::failure::Failure;
 use crate::output::write_json;
-use vicurve::render::scene::{random_scene, render_scene, strained_grid};
+use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid};
 
 pub fn scene(a: &Args) -> Result<(), Failure> {
     let mut scene = if a.shape == ShapeName::Grid {
         let d0 = 2.0 * a.radius.unwrap_or(15.0);
-        strained_grid(10, 10, d0, (2.0 * d0).max(d0 * 1.3 + 24.0), a.seed)
+        match a.size.as_deref() {
+            Some(size) => {
+                let (w, h) = parse_size(size)?;
+                circle_grid(w as usize, h as usize, 10, 10, d0, true, a.seed)?
+            }
+            None => strained_grid(10, 10, d0, (2.0 * d0).max(d0 * 1.3 + 24.0), a.seed),
+        }
     } else {
         let (w, h) = parse_size(a.size.as_deref().unwrap_or("1024x768"))?;
         random_scene(w as usize, h as usize, 50, 20, 5, false, 8.0, a.seed)?

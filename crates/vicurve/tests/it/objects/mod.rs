@@ -3,4 +3,6 @@
 //! reason.
 
 mod grid;
+mod holes;
+mod lines;
 mod scene;

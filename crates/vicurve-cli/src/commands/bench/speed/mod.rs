@@ -11,9 +11,9 @@
 mod cases;
 mod inproc;
 mod peers;
-mod process;
+pub(super) mod process;
 mod profile;
-mod report;
+pub(super) mod report;
 
 use crate::failure::Failure;
 use cases::SpeedCase;
