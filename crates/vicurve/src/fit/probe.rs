@@ -83,20 +83,14 @@ impl Schedule<'_> {
     /// The stage to probe with: the default schedule's last coarse stage,
     /// when wider ones precede it and its band suits the curve; none for a
     /// tracked frame or stages the user gave.
-    fn probe_stage(&mut self) -> Option<usize> {
+    fn probe_stage(&self) -> Option<usize> {
         if !self.auto || self.tracked.is_some() || self.stages.len() < 3 {
             return None;
         }
         let k = self.stages.len() - 2;
-        let wider = self.stages[..k]
-            .iter()
-            .any(|s| s.half_width > self.stages[k].half_width);
-        let skipped = self.skipped.len();
-        let too_wide = self.too_wide(&self.stages[k].clone());
-        // `too_wide` records its reason; the schedule records it again when
-        // it reaches the stage.
-        self.skipped.truncate(skipped);
-        (wider && !too_wide).then_some(k)
+        let r = self.stages[k].half_width;
+        let wider = self.stages[..k].iter().any(|s| s.half_width > r);
+        (wider && self.fits_band(r)).then_some(k)
     }
 
     /// Everything as it was before the probe.

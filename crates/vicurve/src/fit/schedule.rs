@@ -217,21 +217,29 @@ impl<'s> Schedule<'s> {
 
     /// Whether a coarse stage's band is too wide for the curve (then it is
     /// skipped, the reason recorded).
-    pub(super) fn too_wide(&mut self, stage: &Stage) -> bool {
+    fn too_wide(&mut self, stage: &Stage) -> bool {
         let r = stage.half_width;
+        if self.fits_band(r) {
+            return false;
+        }
+        let length = self.current.arc_length();
+        self.skipped.push(format!(
+            "R = {r} px: too wide for a curve of length {length:.1} px"
+        ));
+        true
+    }
+
+    /// Whether a band of half-width `r` (pixels) suits the current curve:
+    /// `r` at most half the radius of a circle of the same length (half
+    /// the length of an open curve).
+    pub(super) fn fits_band(&self, r: f64) -> bool {
         let length = self.current.arc_length();
         let size = if self.current.is_closed() {
             length / TAU
         } else {
             length
         };
-        if r > 0.5 * size {
-            self.skipped.push(format!(
-                "R = {r} px: too wide for a curve of length {length:.1} px"
-            ));
-            return true;
-        }
-        false
+        r <= 0.5 * size
     }
 
     /// After the last stage: estimate the edge's blur on the measured

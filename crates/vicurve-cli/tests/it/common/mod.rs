@@ -78,23 +78,8 @@ fn one_error_line(out: &Output, code: i32) -> String {
     err
 }
 
-/// The cells of one CSV line (quoted cells may hold commas and `""`).
+/// The cells of one CSV line (quoted cells may hold commas and `""`): the
+/// library's own reader of the files it writes.
 pub fn split_cells(line: &str) -> Vec<String> {
-    let mut cells = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => cells.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    cells.push(cur);
-    cells
+    vicurve::sequence::run::summary::split_csv(line)
 }
