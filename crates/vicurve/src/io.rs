@@ -9,7 +9,7 @@
 //! [`crate::image`]) per row; see [`parse_polyline_csv`].
 //!
 //! Multi-page TIFF stacks, page by page: [`stack`]; videos, by FFmpeg:
-//! [`video`]. Result files written whole or not at all: [`write`].
+//! [`video`]. Result files written whole or not at all: [`mod@write`].
 
 pub mod stack;
 pub mod video;

@@ -141,7 +141,7 @@ impl SplineCurve {
     /// at the first point of an open curve or at its last is ignored (the
     /// ends are breaks already); out-of-range indices are errors. A closed
     /// curve with corners starts at its first corner (after the
-    /// re-orientation): see [`start_at_first_corner`].
+    /// re-orientation).
     pub fn fit_with_corners(
         points: &[[f64; 2]],
         closed: bool,

@@ -252,6 +252,11 @@ impl<'s> Schedule<'s> {
         if !self.config.blur_correction || self.tracked.is_some() {
             return;
         }
+        // After the pixel-edge stage (which fits the blur itself) the
+        // spread is not used again: keep the one it was chosen from.
+        if self.pixel_edge.is_some() {
+            return;
+        }
         let r = stage.half_width;
         self.edge_spread = estimate_spread(self.sampler, &self.current, self.config.kind);
         let chosen = self.last.as_ref().map(|f| f.corr.basis().element_length());
@@ -485,20 +490,8 @@ fn tracked_reference(
 /// at 1 % noise; a faint but real edge stands well above 2 %.
 const MIN_CONTRAST_FRACTION: f64 = 0.02;
 
-/// The image's gray-level range: the 99.5th minus the 0.5th percentile of
-/// a regular subsample of at most about 65,536 pixels (robust to hot
-/// pixels and specks).
+/// The image's gray-level range ([`Sampler::gray_range`], computed once
+/// per image).
 fn gray_range(sampler: &Sampler) -> f64 {
-    let (w, h) = (sampler.width(), sampler.height());
-    let stride = ((w * h) / 65_536).max(1);
-    let mut values: Vec<f64> = (0..w * h)
-        .step_by(stride)
-        .filter_map(|k| sampler.pixel(k % w, k / w))
-        .collect();
-    if values.is_empty() {
-        return 0.0;
-    }
-    values.sort_unstable_by(f64::total_cmp);
-    let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
-    at(0.995) - at(0.005)
+    sampler.gray_range()
 }

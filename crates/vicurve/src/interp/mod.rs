@@ -122,6 +122,8 @@ pub struct Sampler {
     /// B-spline), mirrored into a `(width + 2 pad) x (height + 2 pad)`
     /// frame.
     coef: Arc<Vec<f64>>,
+    /// [`Sampler::gray_range`], computed on first use and shared by clones.
+    range: Arc<std::sync::OnceLock<f64>>,
 }
 
 impl Sampler {
@@ -168,6 +170,7 @@ impl Sampler {
             stride: w + 2 * pad,
             pad,
             coef,
+            range: Arc::default(),
         }
     }
 
@@ -222,6 +225,27 @@ impl Sampler {
                 self.coef[(y + self.pad) * self.stride + x + self.pad]
             }
             Interpolation::CubicBSpline => self.cubic_value(x as f64, y as f64, bspline_weights),
+        })
+    }
+
+    /// The image's gray-level range: the 99.5th minus the 0.5th percentile
+    /// of a regular subsample of at most about 65,536 pixels (robust to hot
+    /// pixels and specks); 0 for an empty image. Computed once per image and
+    /// kept (every fit of the image's objects asks for it).
+    pub fn gray_range(&self) -> f64 {
+        *self.range.get_or_init(|| {
+            let (w, h) = (self.width, self.height);
+            let stride = ((w * h) / 65_536).max(1);
+            let mut values: Vec<f64> = (0..w * h)
+                .step_by(stride)
+                .filter_map(|k| self.pixel(k % w, k / w))
+                .collect();
+            if values.is_empty() {
+                return 0.0;
+            }
+            values.sort_unstable_by(f64::total_cmp);
+            let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+            at(0.995) - at(0.005)
         })
     }
 

@@ -7,9 +7,9 @@
 //! resumed from its files goes on exactly as an uninterrupted one:
 //! - the *tracking schedule* first when the curve asks for it and the
 //!   previous frame left a [`TrackState`] (the pixel-edge stage alone, on
-//!   the band the previous frame left in the [`TrackCache`]);
+//!   the band the previous frame left in the [`crate::fit::TrackCache`]);
 //! - else (or when it cannot measure) the tracked configuration from the
-//!   previous curve smoothed ([`step`]);
+//!   previous curve smoothed (`step`);
 //! - a tracked fit that fails is tried again with the first frame's
 //!   configuration when the two differ.
 //!

@@ -24,7 +24,7 @@
 //! Edge cases: an axis-aligned edge (`nx` or `ny` zero) or a focused one
 //! (no blur) is a limit of the formula (0/0); widths and the blur are raised
 //! to 1e-3 px (widths to 5 % of a larger blur, at most 0.02 px: see
-//! [`MIN_WIDTH`]), which moves a focused edge's profile by at most 4e-4 of
+//! `MIN_WIDTH`), which moves a focused edge's profile by at most 4e-4 of
 //! the contrast at a pixel whose centre lies within 1e-3 px of a corner of
 //! the trapezoid (about 1e-5 RMS over the band; 1e-6 for a diagonal edge).
 //! The floors
