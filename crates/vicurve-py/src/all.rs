@@ -22,7 +22,8 @@ use vicurve::objects::{measure_all as measure_every, object_table, AllConfig, Al
 /// each is in). `kind="contour"` measures every ridge or valley line
 /// instead, each line whose strength is at least `min_strength` (default
 /// from the noise). `model` ("circle", "ellipse", "polygon:N") is fitted to
-/// each.
+/// each. `corners=N`: the objects are polygons of N corners (the cells of
+/// a square grid: 4), each fit breaking at its start's N sharpest turns.
 ///
 /// Returns `(results, table)`: one entry per object, numbered row-major by
 /// centroid, a `Result` (None when the object could not be measured at
@@ -34,7 +35,7 @@ use vicurve::objects::{measure_all as measure_every, object_table, AllConfig, Al
 #[pyo3(signature = (
     image, *, polarity = "auto", model = None, min_length = None, min_area = None,
     roi = None, include_border = false, holes = false, kind = "silhouette",
-    min_strength = None
+    min_strength = None, corners = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn measure_all<'py>(
@@ -49,6 +50,7 @@ pub fn measure_all<'py>(
     holes: bool,
     kind: &str,
     min_strength: Option<f64>,
+    corners: Option<usize>,
 ) -> PyResult<(Vec<Option<PyMeasurement>>, Bound<'py, PyDict>)> {
     let model: Option<ShapeModel> = model.map(str::parse).transpose().map_err(to_py_err)?;
     let config = AllConfig {
@@ -60,6 +62,7 @@ pub fn measure_all<'py>(
         include_border,
         holes,
         min_strength,
+        corners,
         fit: vicurve::fit::FitConfig {
             kind: kind.parse().map_err(to_py_err)?,
             ..vicurve::fit::FitConfig::default()

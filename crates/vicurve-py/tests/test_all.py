@@ -50,11 +50,25 @@ def test_the_table_is_a_dataframe_with_pandas():
     assert list(table["outcome"]) == ["measured"]
 
 
-def test_the_table_is_a_dataframe_with_pandas():
-    pd = pytest.importorskip("pandas")
-    _, table = vicurve.measure_all(discs([(60.3, 50.2)]))
-    assert isinstance(table, pd.DataFrame)
-    assert list(table["outcome"]) == ["measured"]
+def test_square_objects_are_measured_with_breaks_at_their_corners():
+    # Two squares of side 40 turned by 0.3 rad, 8x8 supersampled.
+    h, w = 120, 240
+    yy, xx = np.mgrid[0:h * 8, 0:w * 8]
+    x, y = (xx + 0.5) / 8 - 0.5, (yy + 0.5) / 8 - 0.5
+    inside = np.zeros_like(x, dtype=bool)
+    c, s = np.cos(0.3), np.sin(0.3)
+    for cx, cy in [(60.3, 60.2), (170.6, 58.7)]:
+        u = c * (x - cx) + s * (y - cy)
+        v = -s * (x - cx) + c * (y - cy)
+        inside |= (np.abs(u) < 20) & (np.abs(v) < 20)
+    image = 0.2 + 0.6 * inside.reshape(h, 8, w, 8).mean(axis=(1, 3))
+    results, table = vicurve.measure_all(image, corners=4)
+    assert list(table["outcome"]) == ["measured"] * 2
+    # Sides measured as straight lines meeting at corners: the area within
+    # a pixel of the exact 1600 px^2.
+    assert all(abs(r.area - 1600.0) < 1.0 for r in results), [r.area for r in results]
+    with pytest.raises(ValueError, match="corners"):
+        vicurve.measure_all(image, corners=2)
 
 
 def test_holes_and_lines():

@@ -38,6 +38,13 @@ pub struct AllArgs {
     /// strongest line's).
     #[arg(long, value_name = "STRENGTH")]
     pub min_strength: Option<f64>,
+    /// With --all: the objects are polygons of N corners (square holes,
+    /// the cells of a square grid: 4); each fit breaks at its start's N
+    /// sharpest turns, so that the sides are measured as smooth curves
+    /// meeting at corners (an object whose corners are not found is
+    /// measured smooth).
+    #[arg(long, value_name = "N")]
+    pub corners: Option<usize>,
     /// With --all: write one row per object as CSV (id, outcome, centroid,
     /// area, equivalent diameter, circle and ellipse with sigmas, model
     /// parameters with sigmas, RMS residual, message).
@@ -54,10 +61,11 @@ impl AllArgs {
                 || self.include_border
                 || self.holes
                 || self.min_strength.is_some()
+                || self.corners.is_some()
                 || self.table.is_some())
         {
             return Err(Failure::Error(
-                "--min-length, --min-area, --include-border, --holes, --min-strength and --table go with --all"
+                "--min-length, --min-area, --include-border, --holes, --min-strength, --corners and --table go with --all"
                     .into(),
             ));
         }

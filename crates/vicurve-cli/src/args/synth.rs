@@ -41,6 +41,13 @@ pub enum ShapeName {
     /// `--truth` gives every ellipse and its strains. Defaults: blur 1,
     /// noise 0.01, 8 bits.
     Grid,
+    /// A printed square grid after forming: 8x8 bright square cells
+    /// between dark lines `--line` px wide (default 10), the pitch as large
+    /// as `--size` allows (default 640x640), every point moved by a known
+    /// smooth deformation; `--truth` gives each cell's index, exact
+    /// centroid, deformation gradient and strains (`vicurve grid --pitch`
+    /// measures it). Defaults: blur 1, noise 0.01, 8 bits.
+    SquareGrid,
 }
 
 /// Gray levels BACKGROUND,FOREGROUND when not given.

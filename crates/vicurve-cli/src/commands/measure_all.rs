@@ -27,6 +27,7 @@ pub fn config(args: &Args) -> Result<AllConfig, Failure> {
         roi: args.start.automatic()?.roi,
         include_border: args.all.include_border,
         holes: args.all.holes,
+        corners: args.all.corners,
         min_strength: args.all.min_strength,
         model: args.model,
         fit,

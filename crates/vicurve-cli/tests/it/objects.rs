@@ -205,6 +205,83 @@ fn grid_strains_from_a_synthetic_grid() {
     assert_eq!(drawn.width(), grid_image.width());
 }
 
+/// `synth square-grid` then `grid --pitch`: every cell in the table with
+/// its lattice index, interior strains near the truth, the JSON's cells;
+/// --pitch and --diameter are exclusive, one is needed.
+#[test]
+fn square_grid_strains_from_a_synthetic_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = (p(d, "sq.png"), p(d, "sq.json"));
+    ok(&vicurve(&[
+        "synth",
+        "square-grid",
+        "--out",
+        &img,
+        "--truth",
+        &truth,
+    ]));
+    let t = json(&truth);
+    let pitch = t["pitch"].as_f64().unwrap().to_string();
+    let (table, out) = (p(d, "cells.csv"), p(d, "cells.json"));
+    let run = vicurve(&[
+        "grid", &img, "--pitch", &pitch, "--table", &table, "--out", &out,
+    ]);
+    ok(&run);
+    assert!(
+        text(&run.stderr).contains("36 from central differences"),
+        "{}",
+        text(&run.stderr)
+    );
+    let rows = csv(&table);
+    assert_eq!(rows.len() - 1, 64);
+    let col = |n: &str| rows[0].iter().position(|c| c == n).unwrap();
+    let cells = t["cells"].as_array().unwrap();
+    let mut checked = 0;
+    for r in &rows[1..] {
+        let ij = [
+            r[col("column")].parse::<i64>().unwrap(),
+            r[col("row")].parse::<i64>().unwrap(),
+        ];
+        let c = cells
+            .iter()
+            .find(|c| {
+                c["index"][0].as_i64() == Some(ij[0]) && c["index"][1].as_i64() == Some(ij[1])
+            })
+            .unwrap();
+        for (name, k) in [("x", 0), ("y", 1)] {
+            let v: f64 = r[col(name)].parse().unwrap();
+            assert!(
+                (v - c["centroid"][k].as_f64().unwrap()).abs() < 0.02,
+                "{name} of {ij:?}"
+            );
+        }
+        if r[col("central")] == "1" {
+            for (name, k) in [("eps1", 0), ("eps2", 1)] {
+                let v: f64 = r[col(name)].parse().unwrap();
+                let e = (v - c["strain"][k].as_f64().unwrap()).abs();
+                assert!(e < 3e-4, "{name} of {ij:?}: {e}");
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 36);
+    let j = json(&out);
+    assert_eq!(j["cells"].as_array().unwrap().len(), 64);
+    assert!(j.get("circles").is_none() && j["pitch_px"].as_f64().is_some());
+    assert_eq!(j["config"]["corners"].as_u64(), Some(4));
+    let both = vicurve(&["grid", &img, "--pitch", "50", "--diameter", "30"]);
+    assert_eq!(both.status.code(), Some(2));
+    assert!(text(&both.stderr).contains("cannot be used with"));
+    let neither = vicurve(&["grid", &img]);
+    assert_eq!(neither.status.code(), Some(2));
+    assert!(
+        text(&neither.stderr).contains("--diameter <D0>|--pitch <P0>"),
+        "{}",
+        text(&neither.stderr)
+    );
+}
+
 /// Options of --all without it, and --all with --init, are refused.
 #[test]
 fn all_options_are_checked() {

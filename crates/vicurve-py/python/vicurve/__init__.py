@@ -99,7 +99,7 @@ def measure_all(image, **kwargs):
     object: a pandas DataFrame when pandas is installed, else a dict of
     NumPy arrays. Keywords: ``polarity``, ``model``, ``min_length``,
     ``min_area``, ``roi``, ``include_border``, ``holes``, ``kind``
-    (``"contour"``: every line), ``min_strength`` (see
+    (``"contour"``: every line), ``min_strength``, ``corners`` (see
     ``_vicurve.measure_all``).
     """
     import numpy as np

@@ -204,6 +204,7 @@ def measure_all(
     holes: bool = False,
     kind: str = "silhouette",
     min_strength: Optional[float] = None,
+    corners: Optional[int] = None,
 ) -> Tuple[List[Optional[Result]], Dict[str, Any]]:
     """Every object of ``image``: one ``Result`` (or None) per object and
     the table as a dict of NumPy arrays (``vicurve.measure_all`` makes it a

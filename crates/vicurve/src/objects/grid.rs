@@ -1,5 +1,6 @@
 //! Circle-grid strain analysis: each printed circle of diameter `D0`,
-//! measured as an ellipse after forming, gives the principal true strains.
+//! measured as an ellipse after forming, gives the principal true strains
+//! (square grids: [`super::square_grid`]).
 
 use super::{AllResult, ObjectResult};
 use serde::{Deserialize, Serialize};
@@ -34,6 +35,23 @@ pub struct GridStrain {
     pub angle: f64,
     /// Its standard deviation, rad (large when `a` is close to `b`).
     pub sigma_angle: f64,
+    /// Square grids: the deviation `[x, y]` of the cell's centroid
+    /// (`centre`), px.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_centre: Option<[f64; 2]>,
+    /// Square grids: the cell's lattice index `[column, row]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell: Option<[i64; 2]>,
+    /// Square grids: the local deformation gradient `F` (row-major,
+    /// `F[r][c] = dx_r / dX_c`, reference axes along the columns and rows).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gradient: Option<[[f64; 2]; 2]>,
+    /// Square grids: whether `F` is from central differences in both
+    /// directions (second order); `false` at the grid's edge (one-sided,
+    /// first order: biased by about half a pitch times the strain's
+    /// gradient).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub central: Option<bool>,
 }
 
 /// The strains of every measured object of `all` for circles printed with
@@ -100,5 +118,9 @@ fn strain_of(o: &ObjectResult, d0: f64) -> Option<GridStrain> {
         sigma_eps3: (s1 * s1 + s2 * s2 + 2.0 * c12).max(0.0).sqrt(),
         angle,
         sigma_angle: sang,
+        sigma_centre: None,
+        cell: None,
+        gradient: None,
+        central: None,
     })
 }

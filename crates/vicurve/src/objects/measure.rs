@@ -49,6 +49,16 @@ pub(crate) fn measure_one(
             Polarity::Negative
         };
     }
+    if let (
+        Some(n),
+        InitialCurve::Polyline {
+            points,
+            closed: true,
+        },
+    ) = (config.corners, &start)
+    {
+        base.breaks = super::corners::corner_breaks(points, n).unwrap_or_default();
+    }
     let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
     let fit = capped_config(&c.region, c.neighbour, &base, radius);
     measure_from_start(image, sampler, out, start, fit, config, |m| {

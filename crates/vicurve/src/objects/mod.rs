@@ -47,15 +47,18 @@
 //! # Ok::<(), vicurve::Error>(())
 //! ```
 
+pub mod corners;
 pub mod find;
 pub mod grid;
 mod lines;
 mod measure;
 pub mod order;
+pub mod square_grid;
 pub mod table;
 
 pub use find::{Candidate, Found};
 pub use grid::{grid_strains, GridStrain};
+pub use square_grid::{cell_polarity, cell_strains, lattice_indices};
 pub use table::{object_table, Table};
 
 use crate::curve::InitialCurve;
@@ -146,6 +149,12 @@ pub struct AllConfig {
     /// Default (`None`): 8 times the strength's noise, and at least a tenth
     /// of the strongest line's.
     pub min_strength: Option<f64>,
+    /// Objects are polygons of this many corners (the cells of a square
+    /// grid: 4): each object's fit breaks at the start's sharpest turns
+    /// ([`corners::corner_breaks`]), so that its sides are measured as
+    /// smooth curves meeting at corners; an object whose corners are not
+    /// found is measured as a smooth curve. Default: none (smooth).
+    pub corners: Option<usize>,
     /// The shape model fitted to every object. Default: none.
     pub model: Option<ShapeModel>,
     /// The B-spline measurement's settings (its stages are capped per
@@ -165,6 +174,7 @@ impl Default for AllConfig {
             include_border: false,
             holes: false,
             min_strength: None,
+            corners: None,
             model: None,
             fit: FitConfig::default(),
             model_config: ModelConfig::default(),
@@ -184,6 +194,14 @@ impl AllConfig {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(Error::invalid(name, format!("{v}: must be >= 0")));
                 }
+            }
+        }
+        if let Some(n) = self.corners {
+            if !(3..=1000).contains(&n) {
+                return Err(Error::invalid(
+                    "corners",
+                    format!("{n}: a polygon has 3 to 1000 corners"),
+                ));
             }
         }
         if self.model == Some(ShapeModel::BsplineCurve) || self.model == Some(ShapeModel::Line) {

@@ -21,6 +21,7 @@ pub mod profile;
 pub mod scene;
 pub mod shapes;
 pub mod specimen;
+pub mod square_grid;
 mod truth_file;
 
 pub use truth_file::Truth;

@@ -98,8 +98,15 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
         }
         rings.extend(these);
     }
+    paint(&rings, scene)
+}
+
+/// The image of the region bounded by `rings` with `scene`'s levels, blur,
+/// noise and quantisation (its shapes are not used). Errors: those of
+/// [`coverage::polygon_coverage`] and [`blur::gaussian_blur`].
+pub(super) fn paint(rings: &[Vec<[f64; 2]>], scene: &Scene) -> Result<Image> {
     let (fg, bg) = (scene.foreground, scene.background);
-    let mut cov = coverage::polygon_coverage(scene.width, scene.height, &rings)?;
+    let mut cov = coverage::polygon_coverage(scene.width, scene.height, rings)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
     let mut image = Image::new(scene.width, scene.height, cov)?;
     if scene.blur_sigma > 0.0 {
@@ -253,7 +260,7 @@ pub fn random_scene(
 
 /// A scene of `items` with the default rendering: 0.8 on 0.2, blur 1 px,
 /// noise 1 % of the contrast, 8 bits.
-fn scene_of(
+pub(super) fn scene_of(
     width: usize,
     height: usize,
     items: Vec<SceneItem>,

@@ -15,6 +15,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if args.shape == ShapeName::Necking {
         return necking::necking(&args);
     }
+    if args.shape == ShapeName::SquareGrid {
+        return scene::square(&args);
+    }
     if matches!(args.shape, ShapeName::Scene | ShapeName::Grid) {
         return scene::scene(&args);
     }
@@ -111,7 +114,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
                 "necking is a sequence: see synth necking".into(),
             ));
         }
-        ShapeName::Scene | ShapeName::Grid => {
+        ShapeName::Scene | ShapeName::Grid | ShapeName::SquareGrid => {
             return Err(Failure::Error(
                 "scene and grid hold many shapes: see synth scene, synth grid".into(),
             ));

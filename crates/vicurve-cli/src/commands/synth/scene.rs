@@ -1,12 +1,14 @@
-//! `vicurve synth scene|grid --out IMAGE [--truth FILE]`: many objects in
-//! one image ([`vicurve::render::scene`]), the truth file listing every
-//! shape with its role (object, speck, border) and, for a grid, its exact
+//! `vicurve synth scene|grid|square-grid --out IMAGE [--truth FILE]`: many
+//! objects in one image ([`vicurve::render::scene`],
+//! [`vicurve::render::square_grid`]), the truth file listing every shape
+//! with its role (object, speck, border) and, for a grid, its exact
 //! strains.
 
 use crate::args::synth::{check_bits, parse_size, Args, ShapeName};
 use crate::failure::Failure;
 use crate::output::write_json;
 use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid};
+use vicurve::render::square_grid::square_grid;
 
 pub fn scene(a: &Args) -> Result<(), Failure> {
     let mut scene = if a.shape == ShapeName::Grid {
@@ -41,6 +43,42 @@ pub fn scene(a: &Args) -> Result<(), Failure> {
         scene.width,
         scene.height,
         scene.items.len()
+    );
+    Ok(())
+}
+
+/// `synth square-grid`: a deformed square grid and its truth.
+pub fn square(a: &Args) -> Result<(), Failure> {
+    let (w, h) = parse_size(a.size.as_deref().unwrap_or("640x640"))?;
+    let mut grid = square_grid(
+        w as usize,
+        h as usize,
+        8,
+        8,
+        a.line.unwrap_or(10.0),
+        true,
+        a.seed,
+    )?;
+    if let Some(b) = a.blur {
+        grid.blur_sigma = b;
+    }
+    if let Some(n) = a.noise {
+        grid.noise = n;
+    }
+    let bits = check_bits(a.bits.unwrap_or(8))?;
+    grid.bits = Some(bits);
+    let image = grid.render()?;
+    vicurve::io::save_image(&a.out, &image, bits)?;
+    if let Some(t) = &a.truth {
+        write_json(t, &grid)?;
+    }
+    eprintln!(
+        "wrote {} ({}x{}, {} cells, pitch {:.2} px before forming)",
+        a.out.display(),
+        grid.width,
+        grid.height,
+        grid.cells.len(),
+        grid.pitch
     );
     Ok(())
 }

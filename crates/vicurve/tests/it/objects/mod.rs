@@ -6,3 +6,4 @@ mod grid;
 mod holes;
 mod lines;
 mod scene;
+mod square_grid;
