@@ -71,7 +71,10 @@ impl BandScratch {
         self.grids.resize_with(GRID_PARTS, Vec::new);
         for g in &mut self.grids {
             if g.len() < cells {
-                *g = vec![0; cells];
+                // A quarter to spare: a curve growing stage after stage
+                // (a far start) would otherwise make its grid afresh, and
+                // page-fault it, at every re-reference.
+                *g = vec![0; cells + cells / 4];
             }
         }
         let nseg = chords.nseg;
