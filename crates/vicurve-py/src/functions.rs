@@ -150,6 +150,10 @@ pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
 ///   "global" (one pair, the paper's).
 /// - `breaks`: arc lengths (pixels along the starting curve from its
 ///   start) where the curve may have a corner.
+/// - `find_corners`: without `breaks`, look for corners (a polygon's
+///   vertices: the curve turns sharply within a few pixels and hardly
+///   beside) and measure again with breaks there; the result's
+///   `corners_found` says where. False keeps the smooth measurement.
 /// - `grow`: True to grow an open start (a `Segment` or open `Polyline` on
 ///   the curve) segment by segment until the image border, a closed loop or
 ///   the end of the edge; a number stops at that length (pixels). The
@@ -168,7 +172,7 @@ pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
     image, init = None, *, kind = "silhouette", stages = None, degree = 3,
     polarity = "auto", interpolation = "cubic", tolerance = 1e-4,
     max_iterations = 200, blur_correction = true, levels = "varying", breaks = None,
-    grow = None
+    grow = None, find_corners = true
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
@@ -186,6 +190,7 @@ pub fn measure(
     levels: &str,
     breaks: Option<Vec<f64>>,
     grow: Option<&Bound<'_, PyAny>>,
+    find_corners: bool,
 ) -> PyResult<PyMeasurement> {
     let grow = grow_from_py(grow)?;
     let mut config = FitOptions {
@@ -201,6 +206,7 @@ pub fn measure(
     }
     .config()?;
     config.breaks = breaks.unwrap_or_default();
+    config.find_corners = find_corners;
     config.validate().map_err(to_py_err)?;
     let init = init_from_py(init)?;
     let image = ImageArg::from_py(image)?;

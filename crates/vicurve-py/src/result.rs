@@ -204,6 +204,18 @@ impl PyMeasurement {
         self.measurement.skipped.clone()
     }
 
+    /// Corners found on a first, smooth measurement, where the curve was
+    /// measured again with breaks: `[(x, y), ...]`, pixels (empty when
+    /// none; see `measure(find_corners=...)`).
+    #[getter]
+    fn corners_found(&self) -> Vec<(f64, f64)> {
+        self.measurement
+            .corners_found
+            .iter()
+            .map(|p| (p[0], p[1]))
+            .collect()
+    }
+
     /// The starting curve (for an automatic start, the one it found).
     #[getter]
     fn initial_curve<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

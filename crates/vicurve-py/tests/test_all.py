@@ -70,6 +70,28 @@ def test_square_objects_are_measured_with_breaks_at_their_corners():
     with pytest.raises(ValueError, match="corners"):
         vicurve.measure_all(image, corners=2)
 
+def test_measure_finds_a_squares_corners():
+    # A square of side 60 turned by 0.3 rad, 8x8 supersampled, measured
+    # from a circle without breaks: its corners are found (within a pixel
+    # of the true ones), or not looked for.
+    n, cx, cy = 160, 80.3, 80.2
+    yy, xx = np.mgrid[0:n * 8, 0:n * 8]
+    x, y = (xx + 0.5) / 8 - 0.5, (yy + 0.5) / 8 - 0.5
+    c, s = np.cos(0.3), np.sin(0.3)
+    u = c * (x - cx) + s * (y - cy)
+    v = -s * (x - cx) + c * (y - cy)
+    inside = (np.abs(u) < 30) & (np.abs(v) < 30)
+    image = 0.2 + 0.6 * inside.reshape(n, 8, n, 8).mean(axis=(1, 3))
+    start = vicurve.Circle(cx, cy, 30.0)
+    r = vicurve.measure(image, start)
+    assert len(r.corners_found) == 4
+    corners = [(cx + c * a - s * b, cy + s * a + c * b)
+               for a, b in [(30, 30), (30, -30), (-30, 30), (-30, -30)]]
+    for px, py in r.corners_found:
+        assert min(np.hypot(px - qx, py - qy) for qx, qy in corners) < 1.0, (px, py)
+    assert abs(r.area - 3600.0) < 1.0
+    assert vicurve.measure(image, start, find_corners=False).corners_found == []
+
 
 def test_holes_and_lines():
     # A disc of radius 30 with a hole of radius 12: with holes=True the

@@ -284,6 +284,11 @@ pub struct Measurement {
     /// 8 px or so, when they vary ([`crate::fit::LevelModel::Varying`]);
     /// empty for the global pair (see the last stage's `a` and `c`).
     pub levels: Vec<LevelSample>,
+    /// Corners found on a first, smooth measurement, where the curve was
+    /// measured again with breaks ([`crate::fit::FitConfig::find_corners`]):
+    /// their positions on the measured curve `[x, y]`, px; empty when none
+    /// was found or the smooth result was kept.
+    pub corners_found: Vec<[f64; 2]>,
 }
 
 /// The virtual image's gray levels at one place of the measured curve.

@@ -75,6 +75,10 @@ pub struct ResultFile<'a> {
     pub stages: &'a [StageReport],
     /// Stages of the default schedule that were skipped, with the reason.
     pub skipped_stages: &'a [String],
+    /// Corners found on a first, smooth measurement, where the curve was
+    /// measured again with breaks (`[x, y]`, px); absent when none.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub corners_found: &'a [[f64; 2]],
     /// Open curves: where each end was trimmed because the band would
     /// leave the image (`null` for an end measured to the start's end);
     /// absent for closed curves.
@@ -166,6 +170,7 @@ impl<'a> ResultFile<'a> {
             misfit: m.misfit_summary(),
             stages: &m.stages,
             skipped_stages: &m.skipped,
+            corners_found: &m.corners_found,
             trim: (!m.curve.is_closed()).then_some(m.trim),
             grow: None,
         }

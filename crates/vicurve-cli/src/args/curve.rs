@@ -118,6 +118,12 @@ pub struct BandArgs {
     /// (repeated knots; see docs/breaks.md), e.g. `--break 120.5,240`.
     #[arg(long = "break", value_name = "S1,S2", value_delimiter = ',')]
     pub breaks: Vec<f64>,
+    /// Do not look for corners: without --break, a curve that turns sharply
+    /// within a few pixels and hardly beside (a polygon's vertex) is
+    /// measured again with breaks there (the JSON's `corners_found`); this
+    /// keeps the smooth measurement.
+    #[arg(long)]
+    pub no_find_corners: bool,
 }
 
 /// `--coords`: the two names with their help, read by
@@ -141,6 +147,7 @@ impl BandArgs {
         };
         config.levels = parse_levels(&self.levels)?;
         config.breaks = self.breaks.clone();
+        config.find_corners = !self.no_find_corners;
         Ok(())
     }
 }

@@ -30,11 +30,7 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "polygon/blur1/noise2/8bit/bright/polyline-1.5px",
-        "max 7.62e-1 > 8 x scatter 6.84e-2; scatter/sigma 3.46",
-    ),
-    (
-        "polygon/blur0/noise0/8bit/bright/auto",
-        "max 7.71e-1 > 8 x scatter 7.41e-2; scatter/sigma 5.05",
+        "max 1.17e-1 > 8 x scatter 1.37e-2",
     ),
     (
         "polygon-breaks/blur2/noise2/8bit/bright/circle-10pct",
@@ -70,15 +66,22 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "polygon/blur2/noise0/16bit/dark/polyline-1.5px",
-        "max 6.46e-1 > 8 x scatter 6.42e-2; scatter/sigma 3.53",
+        "max 1.05e-1 > 8 x scatter 1.18e-2; scatter/sigma 2.28",
     ),
     (
         "polygon/blur4/noise1/8bit/bright/circle-10pct",
-        "max 1.29e0 > 8 x scatter 1.57e-1; scatter/sigma 4.26",
+        "|bias| 1.18e-2 > 5e-3; max 5.97e-1 > 8 x scatter 6.39e-2",
     ),
+    // With its corners found (`FitConfig::find_corners`) this case's
+    // scatter fell from 1.12e-1 to 8.14e-2 px and its largest error rose
+    // from 0.82 to 0.92 px (at a corner, whose sigma there is 0.41 px: at
+    // 5 % noise the two sides' tangents place it loosely). It passed before
+    // only because the smooth curve's cut corners inflated the scatter
+    // (max <= 8 x scatter); the given breaks fail the same way at this blur
+    // (polygon-breaks below).
     (
-        "polygon/blur0/noise2/8bit/dark/auto",
-        "max 7.54e-1 > 8 x scatter 7.52e-2; scatter/sigma 6.98",
+        "polygon/blur2/noise5/16bit/dark/circle-10pct",
+        "max 9.20e-1 > 8 x scatter 8.14e-2",
     ),
     (
         "polygon-breaks/blur4/noise0/16bit/dark/circle-10pct",

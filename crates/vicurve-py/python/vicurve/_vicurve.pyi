@@ -156,6 +156,9 @@ class Result:
     @property
     def skipped(self) -> List[str]: ...
     @property
+    def corners_found(self) -> List[Tuple[float, float]]:
+        """Corners found on a first, smooth measurement (x, y), px."""
+    @property
     def initial_curve(self) -> Union[Circle, Segment, Polyline]: ...
     @property
     def auto_start(self) -> Optional[Dict[str, Any]]: ...
@@ -182,6 +185,7 @@ def measure(
     levels: str = "varying",
     breaks: Optional[Sequence[float]] = None,
     grow: Union[bool, float, None] = None,
+    find_corners: bool = True,
 ) -> Result:
     """Measure the curve in ``image`` starting from ``init``.
 

@@ -155,6 +155,13 @@ pub struct FitConfig {
     /// the curve is known) and distinct; they need exact coordinates.
     /// Default: none (a smooth curve).
     pub breaks: Vec<f64>,
+    /// Look for corners the start did not give: when the measured curve
+    /// turns sharply within a few pixels and hardly beside (a polygon's
+    /// vertex), measure it again with breaks there and keep that result
+    /// when it fits the image better ([`crate::fit::measure_from`];
+    /// [`crate::measurement::Measurement::corners_found`] says where).
+    /// Not when `breaks` are given or the start has corners. Default: true.
+    pub find_corners: bool,
 }
 
 impl Default for FitConfig {
@@ -174,6 +181,7 @@ impl Default for FitConfig {
             coords: Coords::Exact,
             levels: LevelModel::default(),
             breaks: Vec::new(),
+            find_corners: true,
         }
     }
 }

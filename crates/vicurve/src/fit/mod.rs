@@ -44,6 +44,7 @@
 mod blur;
 pub mod breaks;
 mod config;
+mod corner_search;
 mod correlated;
 pub mod grow;
 mod loops;
@@ -98,5 +99,60 @@ pub fn measure_from(
     reference: SplineCurve,
     config: &FitConfig,
 ) -> Result<Measurement> {
-    run_schedule(sampler, reference, config, None)
+    let smooth_start = config.breaks.is_empty() && reference.corners().is_empty();
+    let m = run_schedule(sampler, reference, config, None)?;
+    if !(config.find_corners && smooth_start && config.coords == Coords::Exact) {
+        return Ok(m);
+    }
+    Ok(with_found_corners(sampler, m, config))
 }
+
+/// `m` measured again with breaks at the corners its curve shows
+/// ([`corner_search`]), when it has some and the new result converges
+/// without a residual RMS much above the smooth one's; else `m`.
+fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> Measurement {
+    if !matches!(m.outcome, Outcome::Converged) {
+        return m;
+    }
+    let closed = m.curve.is_closed();
+    let corners = corner_search::find_corners(&m.samples, closed);
+    if corners.is_empty() {
+        return m;
+    }
+    let with = FitConfig {
+        breaks: corners,
+        ..config.clone()
+    };
+    let init = InitialCurve::Polyline {
+        points: m.points(),
+        closed,
+    };
+    let Ok(start) = breaks::initial_curve(&init, &with.breaks) else {
+        return m;
+    };
+    let residual = |m: &Measurement| m.stages.last().map_or(f64::INFINITY, |s| s.residual_rms);
+    match run_schedule(sampler, start, &with, None) {
+        Ok(mut c)
+            if matches!(c.outcome, Outcome::Converged)
+                && residual(&c) < FOUND_CORNERS_GAIN * residual(&m) =>
+        {
+            c.corners_found = c
+                .curve
+                .corners()
+                .iter()
+                .map(|&u| c.curve.point(u))
+                .collect();
+            c
+        }
+        _ => m,
+    }
+}
+
+/// A measurement with found corners is kept unless its residual RMS
+/// exceeds the smooth one's this many times (a refit gone wrong). Not a
+/// test of which fits better: the two last stages' bands differ (the
+/// breaks leave the wedges beyond the corners out, the pixel-edge stage
+/// follows the blur each finds), and on a noisy image the residuals are
+/// the noise's either way (conformance polygons at 2 % noise: 0.0114 ->
+/// 0.0123 while the largest error fell from 0.76 to 0.1 px).
+const FOUND_CORNERS_GAIN: f64 = 1.25;

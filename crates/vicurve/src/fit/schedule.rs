@@ -328,6 +328,7 @@ impl<'s> Schedule<'s> {
                 skipped: self.skipped,
                 trim: Trim::default(),
                 levels: Vec::new(),
+                corners_found: Vec::new(),
             });
         };
         let ends = [0.0, fin.reference.param_length()].map(|u| fin.reference.point(u));
@@ -371,6 +372,7 @@ impl<'s> Schedule<'s> {
             edge_spread: self.edge_spread,
             blur_corrected: blur.is_some() || pixel_edge_result,
             levels,
+            corners_found: Vec::new(),
         })
     }
 

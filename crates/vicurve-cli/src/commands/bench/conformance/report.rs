@@ -70,7 +70,7 @@ fn conventions(s: &mut String) {
          phases set, by a generator seeded with the image id; so is the noise.\n\
          - **Shapes**: disc r = 150; ellipse 180 x 110; stars of 6 lobes, mean radius 140, \
          amplitudes 0.1 (smallest radius of curvature 36 px) and 0.2 (24 px at the lobes, 14 px \
-         in the bays); pentagon of circumradius 160 measured without breaks (`polygon`) and \
+         in the bays); pentagon of circumradius 160 measured without breaks given (`polygon`: the corners the fit finds itself, `FitConfig::find_corners`) and \
          with a break at each corner (`polygon-breaks`: `FitConfig::breaks` at the start's \
          points nearest the corners); the edge y = y0 + 12 sin(2 pi x / 300 + phi) across the \
          whole image (`sine-edge`); lines {LINE_WIDTH} px wide along a circle of radius 150 \
