@@ -12,7 +12,7 @@ const MIN_TURN: f64 = 0.52;
 /// Arc lengths (px, from the first point, in `[0, L)`) of the `n` sharpest
 /// corners of the closed polyline `points` (about a pixel apart, as a
 /// smoothed traced boundary), in increasing order; `None` when fewer than
-/// `n` corners turn by [`MIN_TURN`] or more, or the polyline is too short
+/// `n` corners turn by `MIN_TURN` (30 degrees) or more, or the polyline is too short
 /// for `n` corners (under 8 px a side).
 ///
 /// The turn at a point is the angle between the chords to the points a
