@@ -54,7 +54,8 @@ impl Stage {
 
 /// The default schedule: band half-widths 20, 10, 5 and 2 px with elements
 /// of 80, 40 and 40 px, then automatic (40 px halved down to 5 px while it
-/// pays).
+/// pays); a closed curve gets at least 8 elements in every stage of it (4
+/// are as round as a circle: a small square never reached its corners).
 ///
 /// Wide bands first capture the coarse shape from a start up to ~R away;
 /// the last, 2 px band matches a sharp, focused edge (the paper's optimum is

@@ -109,9 +109,11 @@ pub fn measure_from(
 
 /// `m` measured again with breaks at the corners its curve shows
 /// ([`corner_search`]), when it has some and the new result converges
-/// without a residual RMS much above the smooth one's; else `m`.
+/// without a residual RMS much above the smooth one's; else `m`. A smooth
+/// result at its iteration limit is searched too: a spline ringing at a
+/// polygon's corners is one reason a fit does not settle.
 fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> Measurement {
-    if !matches!(m.outcome, Outcome::Converged) {
+    if matches!(m.outcome, Outcome::Diverged { .. }) {
         return m;
     }
     let closed = m.curve.is_closed();

@@ -62,7 +62,7 @@ pub(super) fn refine(
         mut step,
     } = fit;
     let closed = reference.is_closed();
-    let min_el = if closed { config.degree + 1 } else { 1 };
+    let min_el = super::schedule::min_elements(closed, config.degree, true);
     let length = reference.param_length();
     let params = reference.sample_params((length.ceil() as usize).max(8));
     let mut iterations = 0;

@@ -152,7 +152,7 @@ impl<'s> Schedule<'s> {
             (Some(s), None) => (s.clone(), false),
             (None, None) => (default_stages(), true),
         };
-        let min_el = if closed { config.degree + 1 } else { 1 };
+        let min_el = min_elements(closed, config.degree, auto);
         let mut current = breaks::prepare(reference, &config.breaks)?;
         check_open_start(&current, (sampler.width(), sampler.height()))?;
         let reuse = match (tracked, cache.as_deref_mut()) {
@@ -491,6 +491,25 @@ fn tracked_reference(
 /// fitted contrast is that of the noise it chased: under 1 % of the range
 /// at 1 % noise; a faint but real edge stands well above 2 %.
 const MIN_CONTRAST_FRACTION: f64 = 0.02;
+
+/// Least elements of a closed curve's displacement when the schedule
+/// chooses them: a square's four corners and sides, an ellipse's two
+/// axes. With the default lengths (40 px) a closed curve under 160 px got
+/// the degree's minimum of 4, a shape as round as a circle: a square of
+/// side 40 came out 15 % short in area, its corners never reached.
+pub(super) const MIN_CLOSED_ELEMENTS: usize = 8;
+
+/// The least element count of a curve: for a closed one the degree's
+/// minimum (`degree + 1`), and [`MIN_CLOSED_ELEMENTS`] when the schedule
+/// chooses the lengths (`automatic`: the default schedule, or an `auto`
+/// stage; element counts the user gave are kept).
+pub(super) fn min_elements(closed: bool, degree: usize, automatic: bool) -> usize {
+    match (closed, automatic) {
+        (false, _) => 1,
+        (true, false) => degree + 1,
+        (true, true) => (degree + 1).max(MIN_CLOSED_ELEMENTS),
+    }
+}
 
 /// The image's gray-level range ([`Sampler::gray_range`], computed once
 /// per image).

@@ -336,3 +336,33 @@ fn corners_are_found_on_polygons_and_not_on_smooth_shapes() {
         );
     }
 }
+
+/// A small square (side 40 px) from the circle inscribed in it: its
+/// corners lie 8 px beyond the start. With the degree's minimum of 4
+/// elements a closed curve this short was measured as nearly a circle
+/// (area 1364 px^2 for 1600, "converged"); with at least 8 it is the
+/// square, its corners found.
+#[test]
+fn a_small_square_from_its_inscribed_circle() {
+    let truth = square(
+        60.3,
+        60.2,
+        20.0 * std::f64::consts::SQRT_2,
+        0.3 + std::f64::consts::FRAC_PI_4,
+    );
+    let image = image_of(&truth, 120);
+    let init = InitialCurve::Circle {
+        cx: 60.3,
+        cy: 60.2,
+        r: 20.0,
+    };
+    let m = measure(&image, &init, &FitConfig::default()).expect("small square");
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert_eq!(m.corners_found.len(), 4, "{:?}", m.corners_found);
+    let pts: Vec<[f64; 2]> = m.samples.iter().map(|s| [s.x, s.y]).collect();
+    let (all, _) = errors(&truth, &pts);
+    let area = m.area().unwrap_or(f64::NAN).abs();
+    println!("square of side 40: max error {all:.2e} px, area {area:.3} px^2");
+    assert!(all <= 0.02, "max error {all} px");
+    assert!((area - 1600.0).abs() < 0.5, "area {area}");
+}
