@@ -238,7 +238,7 @@ fn invalid_breaks_are_errors() {
 /// Found corners: the square and a blurred, noisy pentagon measured from a
 /// circle without breaks get their corners found and measured about as
 /// well as with given breaks (measured: 4.4e-5 px on the square, as with
-/// breaks; the pentagon 0.066 px, against 0.77 px smooth); a disc and a
+/// breaks; the pentagon 0.066 px, against 0.88 px smooth); a disc and a
 /// five-lobed star (lobes of radius 15 to 20 px) get none.
 #[test]
 fn corners_are_found_on_polygons_and_not_on_smooth_shapes() {
