@@ -311,7 +311,7 @@ fn synth_grid_honours_the_size() {
 /// holed disc to the table with its parent.
 #[test]
 fn overlays_show_every_object_with_its_id_and_holes_have_a_parent() {
-    use vicurve::render::scene::{render_scene, Role, Scene, SceneItem};
+    use vicurve::render::scene::{render_scene, Rendering, Role, Scene, SceneItem};
     use vicurve::truth::Shape;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -330,12 +330,7 @@ fn overlays_show_every_object_with_its_id_and_holes_have_a_parent() {
             item(300.4, 190.6, 50.0, Role::Object),
             item(301.3, 189.9, 18.0, Role::Hole),
         ],
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 3,
-        bits: Some(8),
+        rendering: Rendering::standard(3),
         d0: None,
     };
     let image = render_scene(&scene).unwrap();

@@ -8,11 +8,11 @@
 //! curve turns by at least [`MIN_TURN`] in the window centred on it and by
 //! [`CONCENTRATION`] times less in each of the two windows beside it. A
 //! smooth curve turns alike in neighbouring windows (a disc of any radius:
-//! ratio 1); a star's lobe of radius 15 px turns by 37 degrees in 10 px at
-//! a ratio of 2; a pentagon's corners, blurred by 1 to 4 px, by 57 to 81
-//! degrees at ratios 3.4 to 24 (the conformance images). The curve is then
-//! measured again from the smooth result with breaks at those corners, and
-//! the new result kept when it fits the image better (`mod.rs`).
+//! ratio 1), a blurred polygon's rounded corner almost only in one (the
+//! thresholds against the conformance stars and pentagons:
+//! docs/breaks.md). The curve is then measured again from the smooth
+//! result with breaks at those corners, and the new result kept when it
+//! converges (`mod.rs`).
 
 use crate::measurement::Sample;
 

@@ -155,6 +155,5 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
 /// test of which fits better: the two last stages' bands differ (the
 /// breaks leave the wedges beyond the corners out, the pixel-edge stage
 /// follows the blur each finds), and on a noisy image the residuals are
-/// the noise's either way (conformance polygons at 2 % noise: 0.0114 ->
-/// 0.0123 while the largest error fell from 0.76 to 0.1 px).
+/// the noise's either way (docs/breaks.md).
 const FOUND_CORNERS_GAIN: f64 = 1.25;

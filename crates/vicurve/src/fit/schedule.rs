@@ -495,8 +495,8 @@ const MIN_CONTRAST_FRACTION: f64 = 0.02;
 /// Least elements of a closed curve's displacement when the schedule
 /// chooses them: a square's four corners and sides, an ellipse's two
 /// axes. With the default lengths (40 px) a closed curve under 160 px got
-/// the degree's minimum of 4, a shape as round as a circle: a square of
-/// side 40 came out 15 % short in area, its corners never reached.
+/// the degree's minimum of 4, a shape as round as a circle, which never
+/// reaches a small square's corners.
 pub(super) const MIN_CLOSED_ELEMENTS: usize = 8;
 
 /// The least element count of a curve: for a closed one the degree's

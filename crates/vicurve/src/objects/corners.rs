@@ -5,8 +5,9 @@
 //! corners.
 
 /// Least turn (rad) for a corner: 30 degrees between the boundary's
-/// directions before and after it. A traced disc of radius 15 px turns by
-/// about 25 degrees over the window's 12 px, a square's corner by 90.
+/// chords before and after it. Over the window `h = L / (6 n)` a circle's
+/// chords turn by `h / r = pi / (3 n)` whatever its radius (15 degrees for
+/// `n = 4`), a square's corner by 90.
 const MIN_TURN: f64 = 0.52;
 
 /// Arc lengths (px, from the first point, in `[0, L)`) of the `n` sharpest

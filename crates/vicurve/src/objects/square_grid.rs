@@ -159,26 +159,19 @@ pub fn cell_strains(all: &AllResult, pitch: f64) -> Vec<Option<GridStrain>> {
             let ij = idx[k]?;
             let (centre, sigma) = cells[k]?;
             let stencil = Stencil::at(ij, &by_index)?;
-            let coords: Vec<[f64; 2]> = stencil
+            // Every cell of a stencil is on the lattice, so has a centroid.
+            let around: Vec<([f64; 2], [f64; 2])> = stencil
                 .cells
                 .iter()
-                .map(|&c| cells[c].map_or([f64::NAN; 2], |v| v.0))
-                .collect();
-            let sigmas: Vec<[f64; 2]> = stencil
-                .cells
-                .iter()
-                .map(|&c| cells[c].map_or([f64::NAN; 2], |v| v.1))
-                .collect();
-            Some(strain_at(
-                all.objects[k].id,
+                .map(|&c| cells[c])
+                .collect::<Option<_>>()?;
+            let cell = Cell {
+                id: all.objects[k].id,
                 ij,
                 centre,
                 sigma,
-                &stencil,
-                &coords,
-                &sigmas,
-                pitch,
-            ))
+            };
+            Some(strain_at(&cell, &stencil, &around, pitch))
         })
         .collect()
 }
@@ -230,6 +223,7 @@ impl Stencil {
     /// neighbours are there, one-sided where one is, `None` where neither
     /// is in some direction.
     fn at(ij: [i64; 2], by_index: &HashMap<[i64; 2], usize>) -> Option<Stencil> {
+        let me = by_index.get(&ij).copied()?;
         let mut cells = Vec::new();
         let slot = |k: usize, cells: &mut Vec<usize>| match cells.iter().position(|&c| c == k) {
             Some(s) => s,
@@ -246,7 +240,6 @@ impl Stencil {
                 n[dir] += s;
                 by_index.get(&n).copied()
             };
-            let me = by_index.get(&ij).copied()?;
             match (off(1), off(-1)) {
                 (Some(p), Some(m)) => {
                     t.push((slot(p, &mut cells), 0.5));
@@ -316,26 +309,31 @@ pub fn principal_strains(f: [[f64; 2]; 2]) -> [f64; 4] {
     [e1, e2, -(e1 + e2), angle]
 }
 
-/// The [`GridStrain`] of one cell, with first-order deviations by finite
-/// differences over the stencil's centroid coordinates.
-#[allow(clippy::too_many_arguments)]
-fn strain_at(
+/// One cell: its object id, lattice index, centroid and the centroid's
+/// deviation `[sx, sy]`, px.
+struct Cell {
     id: usize,
     ij: [i64; 2],
     centre: [f64; 2],
-    sigma_centre: [f64; 2],
+    sigma: [f64; 2],
+}
+
+/// The [`GridStrain`] of `cell` from the centroids and deviations of its
+/// stencil's cells (`around`, in the stencil's order), with first-order
+/// deviations by finite differences over their coordinates.
+fn strain_at(
+    cell: &Cell,
     stencil: &Stencil,
-    coords: &[[f64; 2]],
-    sigmas: &[[f64; 2]],
+    around: &[([f64; 2], [f64; 2])],
     pitch: f64,
 ) -> GridStrain {
-    let f = stencil.gradient(coords, pitch);
+    let mut x: Vec<[f64; 2]> = around.iter().map(|a| a.0).collect();
+    let f = stencil.gradient(&x, pitch);
     let v = principal_strains(f);
     let mut var = [0.0; 4];
     // A step small against the coordinates' deviations' effect, large
     // against rounding.
     let h = 1e-4;
-    let mut x = coords.to_vec();
     for k in 0..x.len() {
         for c in 0..2 {
             let x0 = x[k][c];
@@ -351,13 +349,13 @@ fn strain_at(
                     d = (d + std::f64::consts::FRAC_PI_2).rem_euclid(std::f64::consts::PI)
                         - std::f64::consts::FRAC_PI_2;
                 }
-                var[q] += (d / (2.0 * h) * sigmas[k][c]).powi(2);
+                var[q] += (d / (2.0 * h) * around[k].1[c]).powi(2);
             }
         }
     }
     GridStrain {
-        id,
-        centre,
+        id: cell.id,
+        centre: cell.centre,
         a: 0.5 * pitch * v[0].exp(),
         b: 0.5 * pitch * v[1].exp(),
         eps1: v[0],
@@ -368,8 +366,8 @@ fn strain_at(
         sigma_eps3: var[2].sqrt(),
         angle: v[3],
         sigma_angle: var[3].sqrt(),
-        sigma_centre: Some(sigma_centre),
-        cell: Some(ij),
+        sigma_centre: Some(cell.sigma),
+        cell: Some(cell.ij),
         gradient: Some(f),
         central: Some(stencil.central),
     }

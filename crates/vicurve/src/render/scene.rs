@@ -45,15 +45,11 @@ pub struct SceneItem {
     pub strain: Option<[f64; 3]>,
 }
 
-/// A scene: its shapes and how it is rendered. It is its own truth file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Scene {
-    /// Image width, px.
-    pub width: usize,
-    /// Image height, px.
-    pub height: usize,
-    /// The shapes.
-    pub items: Vec<SceneItem>,
+/// How a many-shape image is rendered after the exact coverage: its two
+/// levels, blur, noise and quantisation. [`Rendering::standard`] is the
+/// scenes' default.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Rendering {
     /// Gray level inside the shapes, in `[0, 1]`.
     pub foreground: f64,
     /// Gray level elsewhere, in `[0, 1]`.
@@ -66,6 +62,36 @@ pub struct Scene {
     pub seed: u64,
     /// Quantisation, 8 or 16 bits, or none.
     pub bits: Option<u8>,
+}
+
+impl Rendering {
+    /// 0.8 on 0.2, blur 1 px, noise 1 % of the contrast (from `seed`),
+    /// 8 bits.
+    pub fn standard(seed: u64) -> Rendering {
+        Rendering {
+            foreground: 0.8,
+            background: 0.2,
+            blur_sigma: 1.0,
+            noise: 0.01,
+            seed,
+            bits: Some(8),
+        }
+    }
+}
+
+/// A scene: its shapes and how it is rendered. It is its own truth file
+/// (the rendering's fields at the top level).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scene {
+    /// Image width, px.
+    pub width: usize,
+    /// Image height, px.
+    pub height: usize,
+    /// The shapes.
+    pub items: Vec<SceneItem>,
+    /// Levels, blur, noise, quantisation.
+    #[serde(flatten)]
+    pub rendering: Rendering,
     /// Printed circles' diameter of a grid scene, px.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub d0: Option<f64>,
@@ -81,13 +107,13 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
             height: scene.height,
             shape: item.shape.clone(),
             kind: Kind::Silhouette,
-            foreground: scene.foreground,
-            background: scene.background,
+            foreground: scene.rendering.foreground,
+            background: scene.rendering.background,
             method: Method::Coverage,
-            blur_sigma: scene.blur_sigma,
-            noise: scene.noise,
-            seed: scene.seed,
-            bits: scene.bits,
+            blur_sigma: scene.rendering.blur_sigma,
+            noise: scene.rendering.noise,
+            seed: scene.rendering.seed,
+            bits: scene.rendering.bits,
             ..RenderSpec::default()
         };
         spec.validate()?;
@@ -98,22 +124,26 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
         }
         rings.extend(these);
     }
-    paint(&rings, scene)
+    paint(&rings, (scene.width, scene.height), &scene.rendering)
 }
 
-/// The image of the region bounded by `rings` with `scene`'s levels, blur,
-/// noise and quantisation (its shapes are not used). Errors: those of
-/// [`coverage::polygon_coverage`] and [`blur::gaussian_blur`].
-pub(super) fn paint(rings: &[Vec<[f64; 2]>], scene: &Scene) -> Result<Image> {
-    let (fg, bg) = (scene.foreground, scene.background);
-    let mut cov = coverage::polygon_coverage(scene.width, scene.height, rings)?;
+/// The `width x height` image of the region bounded by `rings` rendered
+/// by `r`. Errors: those of [`coverage::polygon_coverage`] and
+/// [`blur::gaussian_blur`].
+pub(super) fn paint(
+    rings: &[Vec<[f64; 2]>],
+    (width, height): (usize, usize),
+    r: &Rendering,
+) -> Result<Image> {
+    let (fg, bg) = (r.foreground, r.background);
+    let mut cov = coverage::polygon_coverage(width, height, rings)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
-    let mut image = Image::new(scene.width, scene.height, cov)?;
-    if scene.blur_sigma > 0.0 {
-        image = blur::gaussian_blur(&image, scene.blur_sigma)?;
+    let mut image = Image::new(width, height, cov)?;
+    if r.blur_sigma > 0.0 {
+        image = blur::gaussian_blur(&image, r.blur_sigma)?;
     }
-    noise::add_gaussian_noise(image.data_mut(), scene.noise * (fg - bg).abs(), scene.seed);
-    if let Some(bits) = scene.bits {
+    noise::add_gaussian_noise(image.data_mut(), r.noise * (fg - bg).abs(), r.seed);
+    if let Some(bits) = r.bits {
         noise::quantise(image.data_mut(), bits);
     }
     Ok(image)
@@ -258,9 +288,8 @@ pub fn random_scene(
     Ok(scene_of(width, height, items, seed, None))
 }
 
-/// A scene of `items` with the default rendering: 0.8 on 0.2, blur 1 px,
-/// noise 1 % of the contrast, 8 bits.
-pub(super) fn scene_of(
+/// A scene of `items` with the [`Rendering::standard`] rendering.
+fn scene_of(
     width: usize,
     height: usize,
     items: Vec<SceneItem>,
@@ -271,12 +300,7 @@ pub(super) fn scene_of(
         width,
         height,
         items,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed,
-        bits: Some(8),
+        rendering: Rendering::standard(seed),
         d0,
     }
 }

@@ -12,7 +12,7 @@
 //! exactly; the truth gives, per cell, `F` at the reference centre and its
 //! principal strains, and the exact centroid of the painted cell.
 
-use super::scene::{paint, scene_of};
+use super::scene::{paint, Rendering};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::objects::square_grid::principal_strains;
@@ -58,18 +58,10 @@ pub struct SquareGrid {
     pub line_width: f64,
     /// Whether the field deforms the grid (else it is the printed grid).
     pub strained: bool,
-    /// Gray level of the cells, in `[0, 1]`.
-    pub foreground: f64,
-    /// Gray level of the lines and around the grid, in `[0, 1]`.
-    pub background: f64,
-    /// Gaussian blur, px.
-    pub blur_sigma: f64,
-    /// Noise as a fraction of the contrast.
-    pub noise: f64,
-    /// Seed of the noise.
-    pub seed: u64,
-    /// Quantisation, 8 or 16 bits, or none.
-    pub bits: Option<u8>,
+    /// Levels (`foreground` the cells', `background` the lines'), blur,
+    /// noise, quantisation.
+    #[serde(flatten)]
+    pub rendering: Rendering,
     /// The cells, row after row.
     pub cells: Vec<CellTruth>,
 }
@@ -78,7 +70,7 @@ pub struct SquareGrid {
 /// wide in a `width x height` image: the largest pitch that keeps the
 /// deformed grid a pitch from the border, the grid centred (off the pixel
 /// grid), deformed by the module's field when `strained`. Rendering
-/// defaults: 0.8 cells on 0.2, blur 1 px, noise 1 %, 8 bits.
+/// [`Rendering::standard`] (0.8 cells on 0.2, blur 1 px, noise 1 %, 8 bits).
 ///
 /// Errors: [`Error::InvalidParameter`] for no cell, a line width that is
 /// not positive, or cells that would come out under 8 px across.
@@ -109,7 +101,6 @@ pub fn square_grid(
             ),
         ));
     }
-    let defaults = scene_of(width, height, Vec::new(), seed, None);
     let mut grid = SquareGrid {
         width,
         height,
@@ -118,12 +109,7 @@ pub fn square_grid(
         pitch,
         line_width,
         strained,
-        foreground: defaults.foreground,
-        background: defaults.background,
-        blur_sigma: defaults.blur_sigma,
-        noise: defaults.noise,
-        seed,
-        bits: defaults.bits,
+        rendering: Rendering::standard(seed),
         cells: Vec::new(),
     };
     for i in 0..rows {
@@ -232,13 +218,7 @@ impl SquareGrid {
             .flat_map(|i| (0..self.cols).map(move |j| (i, j)))
             .map(|(i, j)| self.cell_ring(i, j))
             .collect();
-        let mut scene = scene_of(self.width, self.height, Vec::new(), self.seed, None);
-        scene.foreground = self.foreground;
-        scene.background = self.background;
-        scene.blur_sigma = self.blur_sigma;
-        scene.noise = self.noise;
-        scene.bits = self.bits;
-        paint(&rings, &scene)
+        paint(&rings, (self.width, self.height), &self.rendering)
     }
 }
 

@@ -7,8 +7,21 @@
 use crate::args::synth::{check_bits, parse_size, Args, ShapeName};
 use crate::failure::Failure;
 use crate::output::write_json;
-use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid};
+use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid, Rendering};
 use vicurve::render::square_grid::square_grid;
+
+/// `--blur`, `--noise` and `--bits` (default 8) set in `r`; the bits.
+fn with_options(a: &Args, r: &mut Rendering) -> Result<u8, Failure> {
+    if let Some(b) = a.blur {
+        r.blur_sigma = b;
+    }
+    if let Some(n) = a.noise {
+        r.noise = n;
+    }
+    let bits = check_bits(a.bits.unwrap_or(8))?;
+    r.bits = Some(bits);
+    Ok(bits)
+}
 
 pub fn scene(a: &Args) -> Result<(), Failure> {
     let mut scene = if a.shape == ShapeName::Grid {
@@ -24,14 +37,7 @@ pub fn scene(a: &Args) -> Result<(), Failure> {
         let (w, h) = parse_size(a.size.as_deref().unwrap_or("1024x768"))?;
         random_scene(w as usize, h as usize, 50, 20, 5, false, 8.0, a.seed)?
     };
-    if let Some(b) = a.blur {
-        scene.blur_sigma = b;
-    }
-    if let Some(n) = a.noise {
-        scene.noise = n;
-    }
-    let bits = check_bits(a.bits.unwrap_or(8))?;
-    scene.bits = Some(bits);
+    let bits = with_options(a, &mut scene.rendering)?;
     let image = render_scene(&scene)?;
     vicurve::io::save_image(&a.out, &image, bits)?;
     if let Some(t) = &a.truth {
@@ -59,14 +65,7 @@ pub fn square(a: &Args) -> Result<(), Failure> {
         true,
         a.seed,
     )?;
-    if let Some(b) = a.blur {
-        grid.blur_sigma = b;
-    }
-    if let Some(n) = a.noise {
-        grid.noise = n;
-    }
-    let bits = check_bits(a.bits.unwrap_or(8))?;
-    grid.bits = Some(bits);
+    let bits = with_options(a, &mut grid.rendering)?;
     let image = grid.render()?;
     vicurve::io::save_image(&a.out, &image, bits)?;
     if let Some(t) = &a.truth {

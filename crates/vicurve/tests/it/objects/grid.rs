@@ -79,7 +79,7 @@ fn a_noisy_strained_grid_is_found_completely_without_bias() {
 #[test]
 fn a_clean_strained_grid_is_measured_to_4e_3_px() {
     let mut scene = strained_grid(5, 5, 30.0, 60.0, 4);
-    scene.noise = 0.0;
+    scene.rendering.noise = 0.0;
     let all = measure_grid(&scene);
     assert_eq!(all.objects.len(), 25, "{:?}", all.found);
     let errs = errors(&scene, &all);

@@ -3,7 +3,7 @@
 //! objects alone, their bands kept off the holes' edges.
 
 use vicurve::objects::{measure_all, AllConfig, AllResult};
-use vicurve::render::scene::{render_scene, Role, Scene, SceneItem};
+use vicurve::render::scene::{render_scene, Rendering, Role, Scene, SceneItem};
 use vicurve::truth::Shape;
 
 /// A disc with an off-centre round hole, an ellipse with an elliptic hole,
@@ -32,12 +32,7 @@ fn holed_scene() -> Scene {
             item(ellipse(279.1, 141.9, 22.0, 12.5, -0.2), Role::Hole),
             item(circle(180.6, 240.3, 20.0), Role::Object),
         ],
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 1.0,
-        noise: 0.01,
-        seed: 7,
-        bits: Some(8),
+        rendering: Rendering::standard(7),
         d0: None,
     }
 }

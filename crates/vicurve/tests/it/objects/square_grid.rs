@@ -133,7 +133,7 @@ fn a_deformed_square_grid_is_indexed_and_its_strains_measured() {
 #[test]
 fn a_clean_square_grid_bounds_the_corner_bias() {
     let mut grid = square_grid(640, 640, 8, 8, 10.0, true, 7).unwrap();
-    grid.noise = 0.0;
+    grid.rendering.noise = 0.0;
     let all = measure_cells(&grid);
     assert_eq!(all.failed(), 0);
     let errs = cell_errors(&grid, &all);

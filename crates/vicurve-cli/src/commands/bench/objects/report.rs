@@ -84,9 +84,9 @@ pub fn markdown(r: &Results) -> String {
          circles.png --all --out all.json --table objects.csv`.\n",
         r.case.scene.items.len(),
         r.case.scene.d0.unwrap_or(f64::NAN) / 2.0,
-        r.case.scene.blur_sigma,
-        100.0 * r.case.scene.noise,
-        r.case.scene.bits.unwrap_or(0)
+        r.case.scene.rendering.blur_sigma,
+        100.0 * r.case.scene.rendering.noise,
+        r.case.scene.rendering.bits.unwrap_or(0)
     );
     let _ = writeln!(s, "{}\n", accuracy_line(r));
     timing_section(&mut s, r);
