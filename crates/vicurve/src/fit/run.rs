@@ -6,6 +6,7 @@
 use super::{Divergence, FitConfig, IterationRecord, RunKind};
 use crate::correlation::{Correlation, Step, StepFailure};
 use crate::interp::Sampler;
+use crate::spline::{Basis, MAX_DEGREE};
 
 /// A run on one reference that has not converged after this many
 /// iterations goes on with the reference's profile derivative in its
@@ -45,8 +46,9 @@ pub(super) struct RunLimits {
     /// Band half-width, pixels: a step is capped at
     /// [`FitConfig::max_step_fraction`] of it.
     pub half_width: f64,
-    /// A step (before any cap) longer than this, pixels, ends the run
-    /// without being applied ([`Run::Lost`]); infinite for none.
+    /// A step (before any cap) that moves the curve by more than this
+    /// ([`step_on_curve`]), pixels, ends the run without being applied
+    /// ([`Run::Lost`]); infinite for none.
     pub lost: f64,
 }
 
@@ -116,7 +118,9 @@ pub(super) fn iterate_to_end(
             new_reference: kind == RunKind::Reference && used == 0,
         });
         used += 1;
-        if s.max_step > limits.lost {
+        // The coefficients' step bounds the curve's (partition of unity),
+        // so the curve is looked at only past the limit.
+        if s.max_step > limits.lost && step_on_curve(corr.basis(), corr.delta()) > limits.lost {
             return (Run::Lost, used);
         }
         *step = Some(s);
@@ -143,6 +147,36 @@ pub(super) fn iterate_to_end(
             return (Run::Rereference, used);
         }
     }
+}
+
+/// The largest displacement (pixels) that the coefficient step `delta`
+/// makes on the curve: `max |sum delta_i N_i(s)|` over the ends and the
+/// middle of every element.
+///
+/// Why not `max |delta_i|`: an open curve's end functions barely reach
+/// into the curve (a cubic's first one is at most 1/6 there), so their
+/// coefficients can take long raw steps that hardly move it, at a trimmed
+/// end say; a band that lost the edge moves the curve itself.
+pub(super) fn step_on_curve(basis: &Basis, delta: &[f64]) -> f64 {
+    let mut values = [0.0; MAX_DEGREE + 1];
+    let p = basis.degree();
+    let mut largest: f64 = 0.0;
+    let mut at = |s: f64| {
+        let first = basis.eval(s, &mut values);
+        let u: f64 = (0..=p)
+            .map(|k| delta[basis.index(first, k)] * values[k])
+            .sum();
+        largest = largest.max(u.abs());
+    };
+    for e in 0..basis.n_elements() {
+        let (start, h) = basis.element_bounds(e);
+        at(start);
+        at(start + 0.5 * h);
+    }
+    if !basis.is_closed() {
+        at(basis.length());
+    }
+    largest
 }
 
 /// The divergence a failed step means.

@@ -386,15 +386,13 @@ impl Schedule<'_> {
         // (issue 18). Such a step is not applied: the runs fit the global
         // pair instead, the edge's levels where the band sees it, which
         // moves the rest of the curve towards the edge ([`StageState::far`]).
-        // Closed curves only: an open curve's end coefficients, whose basis
-        // functions barely reach into the curve, take long raw steps while
-        // the curve hardly moves (a trimmed end at the border), and would
-        // pass for a lost band.
-        let lost = if self.tracked.is_none()
-            && !st.far
-            && corr.varying_levels()
-            && self.current.is_closed()
-        {
+        // Open curves too: a straight start across a wavy line sees it only
+        // in places, and the varying contrast elsewhere changes sign and
+        // pushes the curve away from the line. The step is the curve's
+        // (`run::step_on_curve`), not the coefficients': an open curve's
+        // end coefficients take long raw steps at a trimmed end while the
+        // curve hardly moves there.
+        let lost = if self.tracked.is_none() && !st.far && corr.varying_levels() {
             r
         } else {
             f64::INFINITY

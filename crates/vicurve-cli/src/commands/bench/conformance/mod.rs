@@ -35,7 +35,9 @@ pub struct ConformanceArgs {
     filter: Option<String>,
     /// Also write each measured case's samples with their signed error to
     /// the truth (`OUT/samples/ID.csv`, the id's `/` as `_`), to see where
-    /// a case fails.
+    /// a case fails, and what measures it again with `vicurve measure`:
+    /// its image (`ID.png`) and its start's points (`ID.start.csv`, for
+    /// `--init polyline:`).
     #[arg(long)]
     samples: bool,
 }
@@ -141,13 +143,47 @@ fn run_image(group: &[Case], samples: Option<&std::path::Path>) -> Vec<Row> {
                 },
             };
             let row = score::score(case, &ran);
-            if let (Some(dir), run::Ran::Measured { m, .. }) = (samples, &ran) {
-                let path = dir.join(format!("{}.csv", case.id.replace('/', "_")));
-                if let Err(e) = std::fs::write(&path, score::samples_csv(case, m)) {
-                    eprintln!("cannot write {}: {e}", path.display());
+            if let Some(dir) = samples {
+                let stem = case.id.replace('/', "_");
+                if let run::Ran::Measured { m, .. } = &ran {
+                    let path = dir.join(format!("{stem}.csv"));
+                    if let Err(e) = std::fs::write(&path, score::samples_csv(case, m)) {
+                        eprintln!("cannot write {}: {e}", path.display());
+                    }
+                }
+                if let Ok(img) = &image {
+                    if let Err(e) = reproduction(case, img, dir, &stem) {
+                        eprintln!("{e}");
+                    }
                 }
             }
             row
         })
         .collect()
+}
+
+/// What a user needs to measure `case` again with the CLI: its image
+/// (`STEM.png`, at the case's depth) and its start (`STEM.start.csv`, the
+/// start's points for `--init polyline:` with `--closed` when it is
+/// closed; an automatic start has none).
+fn reproduction(
+    case: &Case,
+    image: &Image,
+    dir: &std::path::Path,
+    stem: &str,
+) -> Result<(), String> {
+    let png = dir.join(format!("{stem}.png"));
+    vicurve::io::save_image(&png, image, case.image.bits)
+        .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
+    if case.start == cases::Start::Auto {
+        return Ok(());
+    }
+    let init = run::initial_curve(case, image)?;
+    let points = init.dense_points(1.0).map_err(|e| e.to_string())?;
+    let mut text = String::from("x,y\n");
+    for p in &points {
+        text.push_str(&format!("{},{}\n", p[0], p[1]));
+    }
+    let path = dir.join(format!("{stem}.start.csv"));
+    write(&path, &text)
 }
