@@ -18,35 +18,35 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "disc/blur2/noise2/8bit/bright/auto",
-        "|bias| 2.40e-3 > 2e-3",
+        "|bias| 2.67e-3 > 2e-3",
     ),
     (
         "ellipse/blur4/noise5/16bit/dark/polyline-1.5px",
-        "|bias| 1.21e-2 > 5e-3",
+        "|bias| 1.22e-2 > 5e-3",
     ),
     (
         "star-a0.2/blur4/noise0/8bit/bright/circle-0.85r",
-        "scatter/sigma 3.61",
+        "scatter/sigma 3.50",
     ),
     (
         "polygon/blur1/noise2/8bit/bright/polyline-1.5px",
-        "max 1.17e-1 > 8 x scatter 1.37e-2",
+        "max 1.18e-1 > 8 x scatter 1.31e-2",
     ),
     (
         "polygon-breaks/blur2/noise2/8bit/bright/circle-10pct",
-        "|bias| 3.85e-3 > 2e-3; max 2.57e-1 > 8 x scatter 2.56e-2",
+        "|bias| 3.38e-3 > 2e-3; max 2.71e-1 > 8 x scatter 2.40e-2",
     ),
     (
         "polygon-breaks/blur4/noise5/16bit/dark/auto",
-        "|bias| 3.49e-2 > 5e-3; max 2.50e0 > 8 x scatter 3.07e-1",
+        "max 3.39e0 > 8 x scatter 2.87e-1",
     ),
     (
         "sine-edge/blur1/noise0/8bit/bright/polyline-1.5px",
-        "scatter/sigma 1.68",
+        "scatter/sigma 1.53",
     ),
     (
         "sine-edge/blur2/noise1/8bit/dark/segment",
-        "|bias| 2.82e-3 > 2e-3",
+        "|bias| 3.35e-3 > 2e-3",
     ),
     (
         "sine-line/blur4/noise0/8bit/bright/auto",
@@ -54,23 +54,23 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "ellipse/blur2/noise5/8bit/bright/auto",
-        "|bias| 1.07e-2 > 5e-3",
+        "|bias| 1.08e-2 > 5e-3",
     ),
     (
         "star-a0.1/blur2/noise2/8bit/dark/circle-0.85r",
-        "|bias| 3.51e-3 > 2e-3",
+        "|bias| 3.37e-3 > 2e-3",
     ),
     (
         "star-a0.1/blur4/noise5/8bit/bright/auto",
-        "|bias| 2.05e-2 > 5e-3",
+        "|bias| 1.98e-2 > 5e-3",
     ),
     (
         "polygon/blur2/noise0/16bit/dark/polyline-1.5px",
-        "max 1.05e-1 > 8 x scatter 1.18e-2; scatter/sigma 2.28",
+        "max 1.05e-1 > 8 x scatter 1.18e-2",
     ),
     (
         "polygon/blur4/noise1/8bit/bright/circle-10pct",
-        "|bias| 1.35e-2 > 5e-3; max 7.39e-1 > 8 x scatter 6.80e-2",
+        "|bias| 1.29e-2 > 5e-3; max 7.39e-1 > 8 x scatter 7.16e-2",
     ),
     // With its corners found (`FitConfig::find_corners`) this case's
     // scatter fell from 1.12e-1 to 8.14e-2 px and its largest error rose
@@ -81,44 +81,69 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // (polygon-breaks below).
     (
         "polygon/blur2/noise5/16bit/dark/circle-10pct",
-        "max 1.00e0 > 8 x scatter 7.61e-2",
+        "max 9.82e-1 > 8 x scatter 7.65e-2",
     ),
     (
         "polygon-breaks/blur4/noise0/16bit/dark/circle-10pct",
-        "|bias| 1.35e-2 > 5e-3; max 7.63e-1 > 8 x scatter 8.10e-2; scatter/sigma 4.48",
+        "|bias| 1.30e-2 > 5e-3; max 7.20e-1 > 8 x scatter 7.95e-2; scatter/sigma 4.97",
     ),
     (
         "sine-edge/blur2/noise5/8bit/bright/segment",
-        "|bias| 1.49e-2 > 5e-3",
+        "|bias| 1.54e-2 > 5e-3",
     ),
     (
         "sine-edge/blur0/noise0/16bit/dark/auto",
         "scatter/sigma 0.04",
     ),
-    (
-        "ring-line/blur1/noise1/8bit/bright/circle-1.5px",
-        "scatter/sigma 1.46",
-    ),
-    // Converges since open curves also take a band that lost the line as
-    // lost (it diverged before, the curve crossing itself).
-    (
-        "sine-line/blur2/noise1/8bit/bright/segment",
-        "|bias| 2.04e-3 > 2e-3; scatter/sigma 1.49",
-    ),
     // With a line's blur and width estimated on every band pixel and the
     // width taken in the middle of those the data cannot tell apart, the
     // blur-4 rings of the full sweep halved their median |bias| (8.4e-3 to
     // 4.1e-3 px) and `ring-line/blur4/noise5/8bit/bright/auto` passes; this
-    // one went from 4.2e-3 to 8.6e-3 px. On 12 seeds of such a ring (1 %
+    // one went from 4.2e-3 to 8.6e-3 px (9.7e-3 px on the images rendered
+    // as a camera records them, below). On 12 seeds of such a ring (1 %
     // noise) the bias is -3.9e-3 px on average with a deviation of 3.6e-3
     // px from image to image: 5e-3 px is within the noise of one image.
     (
         "ring-line/blur4/noise1/8bit/dark/auto",
-        "|bias| 8.58e-3 > 5e-3",
+        "|bias| 9.65e-3 > 5e-3",
     ),
     (
         "sine-line/blur4/noise2/8bit/dark/auto",
-        "|bias| 8.89e-3 > 5e-3; ends 12.7 px from the border",
+        "|bias| 1.18e-2 > 5e-3; ends 12.7 px from the border",
+    ),
+    // The images are rendered as a camera records them since the blur
+    // acts before the pixels integrate (`render::blur`); before, the blur
+    // of pixel-integrated coverage added an error that depends on where an
+    // edge crosses the pixels (a ring line measured on it scattered by
+    // 5.7e-3 px, on the camera's image by 1.2e-4 px). Errors and sigmas
+    // changed with it, and these five noiseless or marginal cases now fail:
+    // the ellipse's scatter rose from 1.19e-3 to 1.92e-3 px with the 8-bit
+    // rounding of another image while its bias fell from 4.9e-4 to 3.9e-5
+    // px; the star's scatter fell from 2.5e-3 to 7.0e-4 px, below what the
+    // misfit term of its sigma (3.9e-4 px) says; the rings' and lines'
+    // misfit sigma, set on the old images' errors, is now larger than
+    // theirs (ring 1.7e-3 px for 2.5e-3, line 1.3e-3 for 4.8e-3, whose
+    // largest error, 2.4e-2 px, is at an end); the sine edge's bias, 2.2e-3
+    // px at 2 % noise, is one image's noise.
+    (
+        "ellipse/blur1/noise0/8bit/bright/circle-10pct",
+        "scatter/sigma 2.19",
+    ),
+    (
+        "ring-line/blur2/noise0/8bit/bright/circle-10pct",
+        "scatter/sigma 0.70",
+    ),
+    (
+        "star-a0.2/blur1/noise0/16bit/dark/polyline-1.5px",
+        "scatter/sigma 1.81",
+    ),
+    (
+        "sine-edge/blur1/noise2/8bit/dark/polyline-1.5px",
+        "|bias| 2.16e-3 > 2e-3",
+    ),
+    (
+        "sine-line/blur1/noise0/16bit/dark/polyline-1.5px",
+        "max 2.38e-2 > 8 x scatter 1.32e-3; scatter/sigma 0.27",
     ),
 ];
 

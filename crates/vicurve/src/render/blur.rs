@@ -1,9 +1,128 @@
 //! Separable Gaussian blur, the optical blur of synthetic images.
+//!
+//! A camera's optics blur the scene and then each pixel integrates the
+//! blurred light over its square. Blurring an image whose pixels already
+//! integrated the scene ([`gaussian_blur`] on exact coverage) is not the
+//! same: the pixel grid samples the coverage, whose kinks are not band
+//! limited, and the blur of those samples differs from the blur of the
+//! scene by a term that depends on where an edge crosses the pixels. Where
+//! an edge runs along a row or a column every pixel shares that phase and
+//! the term adds up: a ring 2.5 px wide blurred by 2 px and measured on
+//! such an image scattered by 5.7e-3 px (2.7e-2 px at most, at the four
+//! places where it runs along the grid), against 1.2e-4 px on the image a
+//! camera records. [`blurred_coverage`] renders that image (to within
+//! `SUPERSAMPLE`'s error).
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::render::coverage::polygon_coverage;
+
+/// Fine samples per pixel and axis of [`blurred_coverage`]: the error of
+/// a pixel's value is about `0.02 / (k sigma)^2` of the contrast (on an
+/// edge along a column, the worst case: 1.2e-3 at a blur of 1 px with 4,
+/// against 1.6e-2 when the blur follows the pixels), so a blur under
+/// [`FINER_BELOW`] px takes twice as many.
+const SUPERSAMPLE: usize = 4;
+/// See [`SUPERSAMPLE`], pixels.
+const FINER_BELOW: f64 = 1.0;
+/// Fine pixels at most (their coverage is held in memory, 8 bytes each):
+/// larger images take fewer fine samples, down to 2 per axis.
+const MAX_FINE_PIXELS: usize = 1 << 24;
+
+/// The region bounded by `rings` (as [`polygon_coverage`] takes them) as a
+/// `width x height` camera records it through a Gaussian blur of `sigma`
+/// px: the fraction of each pixel's light that comes from the region,
+/// the blur acting on the scene before the pixel integrates (module docs).
+///
+/// The coverage is computed exactly on a grid `k` times finer (`k` = 4,
+/// 8 under a blur of 1 px, fewer on large images: a pixel is then about
+/// `0.02 / (k sigma)^2` of the contrast off), blurred there by a Gaussian
+/// of `sigma k` fine pixels, and each pixel is the mean of its `k x k` fine
+/// pixels (the two steps as one separable kernel, the pixels beyond the
+/// border repeating the border's). `sigma <= 0` gives the coverage itself.
+///
+/// Errors: those of [`polygon_coverage`]; [`Error::InvalidParameter`]
+/// unless `sigma <= 1000`.
+pub fn blurred_coverage(
+    width: usize,
+    height: usize,
+    rings: &[Vec<[f64; 2]>],
+    sigma: f64,
+) -> Result<Vec<f64>> {
+    if sigma.is_nan() || sigma > 1000.0 {
+        return Err(Error::invalid(
+            "blur_sigma",
+            format!("{sigma} px: must be between 0 and 1000"),
+        ));
+    }
+    if sigma <= 0.0 {
+        return polygon_coverage(width, height, rings);
+    }
+    let mut k = if sigma < FINER_BELOW {
+        2 * SUPERSAMPLE
+    } else {
+        SUPERSAMPLE
+    };
+    while k > 2 && (k * k).saturating_mul(width).saturating_mul(height) > MAX_FINE_PIXELS {
+        k /= 2;
+    }
+    // Fine pixel `X` has its centre at `(X + 1/2) / k - 1/2` in pixels.
+    let offset = 0.5 * (k as f64 - 1.0);
+    let fine: Vec<Vec<[f64; 2]>> = rings
+        .iter()
+        .map(|ring| {
+            ring.iter()
+                .map(|p| [k as f64 * p[0] + offset, k as f64 * p[1] + offset])
+                .collect()
+        })
+        .collect();
+    let (fw, fh) = (width * k, height * k);
+    let cov = polygon_coverage(fw, fh, &fine)?;
+    let (kernel, start) = pixel_kernel(sigma, k);
+    // Rows: each fine row to the pixels' columns.
+    let mut rows = vec![0.0; fh * width];
+    rows.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+        let line = &cov[y * fw..(y + 1) * fw];
+        for (x, o) in out.iter_mut().enumerate() {
+            let first = (x * k) as isize + start;
+            *o = kernel
+                .iter()
+                .enumerate()
+                .map(|(j, w)| w * line[(first + j as isize).clamp(0, fw as isize - 1) as usize])
+                .sum();
+        }
+    });
+    // Columns: the fine rows to the pixels' rows.
+    let mut out = vec![0.0; width * height];
+    out.par_chunks_mut(width).enumerate().for_each(|(y, o)| {
+        let first = (y * k) as isize + start;
+        for (j, w) in kernel.iter().enumerate() {
+            let yy = (first + j as isize).clamp(0, fh as isize - 1) as usize;
+            for (v, s) in o.iter_mut().zip(&rows[yy * width..(yy + 1) * width]) {
+                *v += w * s;
+            }
+        }
+    });
+    Ok(out)
+}
+
+/// The weights of the fine samples that make one pixel of
+/// [`blurred_coverage`], `k` fine samples per pixel: the Gaussian of
+/// `sigma k` fine pixels averaged over the pixel's `k` samples. Returns the
+/// weights and the offset of the first from the pixel's first fine sample.
+fn pixel_kernel(sigma: f64, k: usize) -> (Vec<f64>, isize) {
+    let g = gaussian_kernel(sigma * k as f64);
+    let radius = (g.len() / 2) as isize;
+    let mut weights = vec![0.0; g.len() + k - 1];
+    for q in 0..k {
+        for (j, w) in g.iter().enumerate() {
+            weights[q + j] += w / k as f64;
+        }
+    }
+    (weights, -radius)
+}
 
 /// The normalised Gaussian kernel of standard deviation `sigma` px, sampled
 /// at integer offsets `-R..=R` with `R = ceil(5 sigma)`; it sums to 1 and is

@@ -226,9 +226,11 @@ impl RenderSpec {
 
 /// Render the synthetic image described by `spec`.
 ///
-/// Pipeline: exact coverage or profile ([`Method`]), value
-/// `background + (foreground - background) * fraction`; then Gaussian blur
-/// ([`blur::gaussian_blur`]) if `blur_sigma > 0`; then noise of standard
+/// Pipeline: exact coverage through the Gaussian blur of `blur_sigma`
+/// ([`blur::blurred_coverage`]: the blur acts on the scene, then the pixel
+/// integrates, as in a camera) or the profile ([`Method`]) then blurred
+/// ([`blur::gaussian_blur`]), value `background + (foreground -
+/// background) * fraction`; then noise of standard
 /// deviation `noise * |foreground - background|` ([`noise::add_gaussian_noise`]);
 /// then quantisation ([`noise::quantise`]) if `bits` is set.
 ///
@@ -237,19 +239,22 @@ pub fn render(spec: &RenderSpec) -> Result<Image> {
     spec.validate()?;
     let (w, h) = (spec.width, spec.height);
     let (fg, bg) = (spec.foreground, spec.background);
-    let data = match spec.method {
+    let mut image = match spec.method {
         Method::Coverage => {
             let rings = shapes::region_rings(spec)?;
-            let mut cov = coverage::polygon_coverage(w, h, &rings)?;
+            let mut cov = blur::blurred_coverage(w, h, &rings, spec.blur_sigma)?;
             cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
-            cov
+            Image::new(w, h, cov)?
         }
-        Method::Profile { half_width } => profile::profile_pixels(spec, half_width),
+        Method::Profile { half_width } => {
+            let image = Image::new(w, h, profile::profile_pixels(spec, half_width))?;
+            if spec.blur_sigma > 0.0 {
+                blur::gaussian_blur(&image, spec.blur_sigma)?
+            } else {
+                image
+            }
+        }
     };
-    let mut image = Image::new(w, h, data)?;
-    if spec.blur_sigma > 0.0 {
-        image = blur::gaussian_blur(&image, spec.blur_sigma)?;
-    }
     noise::add_gaussian_noise(image.data_mut(), spec.noise * (fg - bg).abs(), spec.seed);
     if let Some(bits) = spec.bits {
         noise::quantise(image.data_mut(), bits);

@@ -8,7 +8,7 @@
 //! inside its object, drawn the other way round), so the image is exact
 //! everywhere. Then blur, noise and quantisation as [`super::render`].
 
-use super::{blur, coverage, noise, shapes, Method, RenderSpec};
+use super::{blur, noise, shapes, Method, RenderSpec};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::truth::{Kind, Shape};
@@ -128,20 +128,17 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
 }
 
 /// The `width x height` image of the region bounded by `rings` rendered
-/// by `r`. Errors: those of [`coverage::polygon_coverage`] and
-/// [`blur::gaussian_blur`].
+/// by `r` (the blur before the pixels integrate:
+/// [`blur::blurred_coverage`]). Errors: those of that function.
 pub(super) fn paint(
     rings: &[Vec<[f64; 2]>],
     (width, height): (usize, usize),
     r: &Rendering,
 ) -> Result<Image> {
     let (fg, bg) = (r.foreground, r.background);
-    let mut cov = coverage::polygon_coverage(width, height, rings)?;
+    let mut cov = blur::blurred_coverage(width, height, rings, r.blur_sigma)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
     let mut image = Image::new(width, height, cov)?;
-    if r.blur_sigma > 0.0 {
-        image = blur::gaussian_blur(&image, r.blur_sigma)?;
-    }
     noise::add_gaussian_noise(image.data_mut(), r.noise * (fg - bg).abs(), r.seed);
     if let Some(bits) = r.bits {
         noise::quantise(image.data_mut(), bits);

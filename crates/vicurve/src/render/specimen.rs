@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{blur, coverage, noise, shapes::SAGITTA};
+use super::{blur, noise, shapes::SAGITTA};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::truth::specimen::{Edge, NeckedBar};
@@ -107,9 +107,9 @@ pub fn bar_ring(spec: &SpecimenSpec) -> Result<Vec<[f64; 2]>> {
 }
 
 /// Render the specimen image described by `spec`: exact coverage of the bar
-/// (value `background + (foreground - background) * fraction`), then the
-/// Gaussian blur, the noise and the quantisation, in that order, as
-/// [`super::render`].
+/// through the Gaussian blur ([`blur::blurred_coverage`], value
+/// `background + (foreground - background) * fraction`), then the noise
+/// and the quantisation, in that order, as [`super::render`].
 ///
 /// Errors: those of [`SpecimenSpec::validate`] and [`bar_ring`].
 pub fn render_specimen(spec: &SpecimenSpec) -> Result<Image> {
@@ -117,12 +117,9 @@ pub fn render_specimen(spec: &SpecimenSpec) -> Result<Image> {
     let (w, h) = (spec.width, spec.height);
     let (fg, bg) = (spec.foreground, spec.background);
     let ring = bar_ring(spec)?;
-    let mut cov = coverage::polygon_coverage(w, h, &[ring])?;
+    let mut cov = blur::blurred_coverage(w, h, &[ring], spec.blur_sigma)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
     let mut image = Image::new(w, h, cov)?;
-    if spec.blur_sigma > 0.0 {
-        image = blur::gaussian_blur(&image, spec.blur_sigma)?;
-    }
     noise::add_gaussian_noise(image.data_mut(), spec.noise * (fg - bg).abs(), spec.seed);
     if let Some(bits) = spec.bits {
         noise::quantise(image.data_mut(), bits);

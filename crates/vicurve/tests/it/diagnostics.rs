@@ -146,19 +146,23 @@ fn clean_disc_unwraps_to_a_straight_edge() {
 }
 
 /// On a blurred disc (1 px), which the interpolation follows, the grid's
-/// residual is the fit's: the virtual image on the grid is the fitted one.
+/// residual is small: the virtual image on the grid is the fitted one.
 /// The measured curve is the true boundary, so the blurred image's
 /// half-level lies `v / (2 rho)` inside it (`v = 1 + 1/12` px^2 the
 /// variance of blur and pixel, `rho = 60` px): the band shows it at
-/// `r = -9.0e-3` px.
+/// `r = -9.0e-3` px. The image blurred as a camera blurs (before the
+/// pixels integrate, `render::blur`) is the pixel-edge profile itself: the
+/// fit's residual is 4.5e-5 of the gray range and the grid's, 3.8e-4, is
+/// the interpolation's (on an image blurred after the pixels integrated,
+/// both were about 2e-3).
 #[test]
 fn blurred_disc_residual_is_the_fits() {
     let s = summarise(1.0);
     let shift = -(1.0 + 1.0 / 12.0) / (2.0 * 60.0);
     assert!((s.crossing[0] - shift).abs() < 2e-3, "{:?}", s.crossing);
     assert!(s.crossing[1] < 0.05, "{:?}", s.crossing);
-    assert!(s.rms[0] < 3e-3, "{:?}", s.rms);
-    assert!(s.rms[0] < 1.5 * s.rms[1], "{:?}", s.rms);
+    assert!(s.rms[0] < 1e-3, "{:?}", s.rms);
+    assert!(s.rms[1] < 1e-4, "{:?}", s.rms);
 }
 
 /// A dark line across the disc's edge: the band finds clutter, and the

@@ -63,9 +63,11 @@ fn conventions(s: &mut String) {
     let _ = writeln!(
         s,
         "## Conventions\n\n\
-         - **Images** ({SIZE}x{SIZE}): rendered by `vicurve::render` with exact pixel coverage \
-         (gray 0.8 on 0.2 for bright objects, 0.2 on 0.8 for dark ones), then Gaussian blur \
-         sigma {BLURS:?} px, additive Gaussian noise {NOISES:?} x the contrast, and 8- or \
+         - **Images** ({SIZE}x{SIZE}): rendered by `vicurve::render` as a camera records \
+         them: the scene blurred by a Gaussian of sigma {BLURS:?} px, then integrated over \
+         each pixel (exact coverage on a grid 2 to 8 times finer, `render::blur`; gray 0.8 \
+         on 0.2 for bright objects, 0.2 on 0.8 for dark ones), additive Gaussian noise \
+         {NOISES:?} x the contrast, and 8- or \
          16-bit quantisation. Centres are moved off the pixel grid, and orientations and \
          phases set, by a generator seeded with the image id; so is the noise.\n\
          - **Shapes**: disc r = 150; ellipse 180 x 110; stars of 6 lobes, mean radius 140, \
