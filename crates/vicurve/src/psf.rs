@@ -49,10 +49,8 @@ pub struct EdgeSpread {
 /// Pixels used by the fits at most (a regular subsample of a larger band).
 /// The fits sum them by distance to the curve ([`Binned`]), so their cost
 /// is that of the bins, not of the pixels: every pixel of an ordinary band
-/// counts. (A line's blur and width trade off along a narrow valley when
-/// the blur exceeds the width; with 1,500 pixels of a ring blurred by 4 px
-/// the noise moved the split enough to bias the curvature correction by
-/// 1e-2 px at 2 % noise.)
+/// counts, which matters most for a line's blur and width (they trade off
+/// along a narrow valley, see [`line_spread`]).
 const MAX_PIXELS: usize = 200_000;
 
 /// Width of the distance bins of [`Binned`], pixels: a profile's value at
@@ -182,11 +180,9 @@ const VALLEY_STEPS: usize = 12;
 /// free over a range, where the best `w` is set by the noise and by the
 /// model's small errors (the pixel's square, the curve's curvature). The
 /// curvature correction takes `s^2`: the middle of the range in `w^2` (in
-/// `s^2`) errs by at most half of it, the best one by all of it (on a ring
-/// of radius 150 px, 2.5 px wide and blurred by 2 px, the best width of a
-/// noiseless image was 0.23 px: `s^2` 0.5 px^2 too large, 1.9e-3 px of
-/// bias). Where the width is well determined the range is narrow and its
-/// middle is the best width.
+/// `s^2`) errs by at most half of it, the best one by all of it (tested
+/// on noisy rings). Where the width is well determined the range is narrow
+/// and its middle is the best width.
 fn valley_middle(
     ssr: impl Fn(f64) -> f64,
     w_best: f64,

@@ -7,11 +7,9 @@
 //! limited, and the blur of those samples differs from the blur of the
 //! scene by a term that depends on where an edge crosses the pixels. Where
 //! an edge runs along a row or a column every pixel shares that phase and
-//! the term adds up: a ring 2.5 px wide blurred by 2 px and measured on
-//! such an image scattered by 5.7e-3 px (2.7e-2 px at most, at the four
-//! places where it runs along the grid), against 1.2e-4 px on the image a
-//! camera records. [`blurred_coverage`] renders that image (to within
-//! `SUPERSAMPLE`'s error).
+//! the term adds up to hundredths of a pixel in a measured position (the
+//! figures are in the commit that brought [`blurred_coverage`], which
+//! renders the image a camera records).
 
 use rayon::prelude::*;
 
@@ -21,8 +19,7 @@ use crate::render::coverage::polygon_coverage;
 
 /// Fine samples per pixel and axis of [`blurred_coverage`]: the error of
 /// a pixel's value is about `0.02 / (k sigma)^2` of the contrast (on an
-/// edge along a column, the worst case: 1.2e-3 at a blur of 1 px with 4,
-/// against 1.6e-2 when the blur follows the pixels), so a blur under
+/// edge along a column, the worst case; tested), so a blur under
 /// [`FINER_BELOW`] px takes twice as many.
 const SUPERSAMPLE: usize = 4;
 /// See [`SUPERSAMPLE`], pixels.
