@@ -140,8 +140,10 @@ pub fn line_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
     let pixel_noise = noise_variance(&data);
     // What the fit leaves unexplained per pixel, noise or the model's own
     // error (a noiseless image), sets which differences are meaningful.
-    let unexplained = pixel_noise.max(valley(w_best) / data.len() as f64);
-    let w = valley_middle(valley, w_best, (W_MIN, half_width), unexplained);
+    let best = valley(w_best);
+    let unexplained = pixel_noise.max(best / data.len() as f64);
+    let limit = best + VALLEY_CHI2 * unexplained;
+    let w = valley_middle(valley, w_best, (W_MIN, half_width), limit);
     let s = best_s(w);
     // The fraction of the variance the noise leaves to explain: a faint
     // line under noise (5 % of the contrast on a line whose blurred peak is
@@ -164,16 +166,17 @@ pub fn line_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
 /// Narrowest line width [`line_spread`] searches, pixels.
 const W_MIN: f64 = 0.05;
 /// Widths whose best fit exceeds the best one's residual sum of squares by
-/// less than this many pixel-noise variances are as likely (a change of
-/// chi-square of 4: two standard deviations of one parameter).
+/// less than this many times a pixel's unexplained variance (its noise, or
+/// what the fit leaves when that is larger) are as likely: a change of
+/// chi-square of 4, two standard deviations of one parameter.
 const VALLEY_CHI2: f64 = 4.0;
 /// Bisection steps that find each end of the widths as likely as the best.
 const VALLEY_STEPS: usize = 12;
 
-/// The line width (pixels) in the middle of those that fit as well as
-/// `w_best` does, within `VALLEY_CHI2` times `unexplained` (a pixel's
-/// variance that the fit leaves) in `ssr` (the residual of the best blur
-/// for a width), searched within `bounds`.
+/// The line width (pixels) in the middle of those around `w_best` whose
+/// `ssr` (the residual of the best blur for a width) is at most `limit`
+/// (the best's plus [`VALLEY_CHI2`] unexplained variances), searched
+/// within `bounds`.
 ///
 /// Why: under a blur wider than the line, the profile is about a Gaussian
 /// of variance `s^2 + w^2 / 12`, so the data fix that sum and leave `w`
@@ -183,13 +186,7 @@ const VALLEY_STEPS: usize = 12;
 /// `s^2`) errs by at most half of it, the best one by all of it (tested
 /// on noisy rings). Where the width is well determined the range is narrow
 /// and its middle is the best width.
-fn valley_middle(
-    ssr: impl Fn(f64) -> f64,
-    w_best: f64,
-    bounds: (f64, f64),
-    unexplained: f64,
-) -> f64 {
-    let limit = ssr(w_best) + VALLEY_CHI2 * unexplained;
+fn valley_middle(ssr: impl Fn(f64) -> f64, w_best: f64, bounds: (f64, f64), limit: f64) -> f64 {
     // The end of the range between `inside` (fits) and `outside`.
     let end = |mut inside: f64, mut outside: f64| {
         if ssr(outside) <= limit {

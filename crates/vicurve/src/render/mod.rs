@@ -237,27 +237,23 @@ impl RenderSpec {
 /// Errors: those of [`RenderSpec::validate`].
 pub fn render(spec: &RenderSpec) -> Result<Image> {
     spec.validate()?;
-    let (w, h) = (spec.width, spec.height);
-    let (fg, bg) = (spec.foreground, spec.background);
-    let mut image = match spec.method {
-        Method::Coverage => {
-            let rings = shapes::region_rings(spec)?;
-            let mut cov = blur::blurred_coverage(w, h, &rings, spec.blur_sigma)?;
-            cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
-            Image::new(w, h, cov)?
-        }
-        Method::Profile { half_width } => {
-            let image = Image::new(w, h, profile::profile_pixels(spec, half_width))?;
-            if spec.blur_sigma > 0.0 {
-                blur::gaussian_blur(&image, spec.blur_sigma)?
-            } else {
-                image
-            }
-        }
+    let size = (spec.width, spec.height);
+    let rendering = scene::Rendering {
+        foreground: spec.foreground,
+        background: spec.background,
+        blur_sigma: spec.blur_sigma,
+        noise: spec.noise,
+        seed: spec.seed,
+        bits: spec.bits,
     };
-    noise::add_gaussian_noise(image.data_mut(), spec.noise * (fg - bg).abs(), spec.seed);
-    if let Some(bits) = spec.bits {
-        noise::quantise(image.data_mut(), bits);
+    match spec.method {
+        Method::Coverage => scene::paint(&shapes::region_rings(spec)?, size, &rendering),
+        Method::Profile { half_width } => {
+            let mut image = Image::new(size.0, size.1, profile::profile_pixels(spec, half_width))?;
+            if spec.blur_sigma > 0.0 {
+                image = blur::gaussian_blur(&image, spec.blur_sigma)?;
+            }
+            Ok(scene::finish(image, &rendering))
+        }
     }
-    Ok(image)
 }

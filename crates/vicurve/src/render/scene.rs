@@ -6,7 +6,8 @@
 //! Every shape is painted by the exact coverage of its dense polygon
 //! ([`super::shapes`]); the shapes do not overlap (a hole lies wholly
 //! inside its object, drawn the other way round), so the image is exact
-//! everywhere. Then blur, noise and quantisation as [`super::render`].
+//! everywhere; blurred before the pixels integrate, then noise and
+//! quantisation, as [`super::render`].
 
 use super::{blur, noise, shapes, Method, RenderSpec};
 use crate::error::{Error, Result};
@@ -138,12 +139,18 @@ pub(super) fn paint(
     let (fg, bg) = (r.foreground, r.background);
     let mut cov = blur::blurred_coverage(width, height, rings, r.blur_sigma)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
-    let mut image = Image::new(width, height, cov)?;
-    noise::add_gaussian_noise(image.data_mut(), r.noise * (fg - bg).abs(), r.seed);
+    Ok(finish(Image::new(width, height, cov)?, r))
+}
+
+/// `image` with the noise and the quantisation of `r` (its blur is
+/// already in it).
+pub(super) fn finish(mut image: Image, r: &Rendering) -> Image {
+    let contrast = (r.foreground - r.background).abs();
+    noise::add_gaussian_noise(image.data_mut(), r.noise * contrast, r.seed);
     if let Some(bits) = r.bits {
         noise::quantise(image.data_mut(), bits);
     }
-    Ok(image)
+    image
 }
 
 /// Draws a shape: the shape, its centre, its reach (px) and the margin it

@@ -9,7 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{blur, noise, shapes::SAGITTA};
+use super::scene::{paint, Rendering};
+use super::shapes::SAGITTA;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::truth::specimen::{Edge, NeckedBar};
@@ -107,24 +108,22 @@ pub fn bar_ring(spec: &SpecimenSpec) -> Result<Vec<[f64; 2]>> {
 }
 
 /// Render the specimen image described by `spec`: exact coverage of the bar
-/// through the Gaussian blur ([`blur::blurred_coverage`], value
+/// through the Gaussian blur ([`super::blur::blurred_coverage`], value
 /// `background + (foreground - background) * fraction`), then the noise
 /// and the quantisation, in that order, as [`super::render`].
 ///
 /// Errors: those of [`SpecimenSpec::validate`] and [`bar_ring`].
 pub fn render_specimen(spec: &SpecimenSpec) -> Result<Image> {
     spec.validate()?;
-    let (w, h) = (spec.width, spec.height);
-    let (fg, bg) = (spec.foreground, spec.background);
-    let ring = bar_ring(spec)?;
-    let mut cov = blur::blurred_coverage(w, h, &[ring], spec.blur_sigma)?;
-    cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
-    let mut image = Image::new(w, h, cov)?;
-    noise::add_gaussian_noise(image.data_mut(), spec.noise * (fg - bg).abs(), spec.seed);
-    if let Some(bits) = spec.bits {
-        noise::quantise(image.data_mut(), bits);
-    }
-    Ok(image)
+    let rendering = Rendering {
+        foreground: spec.foreground,
+        background: spec.background,
+        blur_sigma: spec.blur_sigma,
+        noise: spec.noise,
+        seed: spec.seed,
+        bits: spec.bits,
+    };
+    paint(&[bar_ring(spec)?], (spec.width, spec.height), &rendering)
 }
 
 #[cfg(test)]
