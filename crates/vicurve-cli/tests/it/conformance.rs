@@ -267,3 +267,56 @@ fn conformance_ci_set_meets_the_criteria() {
         problems.join("\n")
     );
 }
+
+/// Mean of the columns `x` and `y` of a points CSV.
+fn centroid(csv: &str) -> [f64; 2] {
+    let rows = read_rows(csv);
+    let mean = |k: &str| {
+        rows.iter()
+            .map(|r| r[k].parse::<f64>().unwrap())
+            .sum::<f64>()
+            / rows.len() as f64
+    };
+    [mean("x"), mean("y")]
+}
+
+/// `--samples` writes, for each case, its samples, its image and its
+/// start's points, and `vicurve measure` on those measures the same curve
+/// again (the start is the circle's points 1 px apart, not the circle, so
+/// the two agree to a fraction of the scatter, not exactly).
+#[test]
+fn conformance_samples_measure_again_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let id = "disc/blur1/noise1/8bit/dark/circle-10pct";
+    let out_dir = dir.path().display().to_string();
+    ok(&vicurve(&[
+        "bench",
+        "conformance",
+        "--out",
+        &out_dir,
+        "--set",
+        "ci",
+        "--filter",
+        id,
+        "--samples",
+    ]));
+    let stem = dir.path().join("samples").join(id.replace('/', "_"));
+    let file = |ext: &str| format!("{}.{ext}", stem.display());
+    let samples = std::fs::read_to_string(file("csv")).unwrap();
+    let points = file("points.csv");
+    ok(&vicurve(&[
+        "measure",
+        &file("png"),
+        "--init",
+        &format!("polyline:{}", file("start.csv")),
+        "--closed",
+        "--points",
+        &points,
+    ]));
+    let again = std::fs::read_to_string(&points).unwrap();
+    let (a, b) = (centroid(&samples), centroid(&again));
+    assert!(
+        (a[0] - b[0]).abs() < 1e-3 && (a[1] - b[1]).abs() < 1e-3,
+        "{a:?} vs {b:?}"
+    );
+}

@@ -1036,15 +1036,12 @@ mod tests {
     /// The pushed profile's gradient takes the profile's derivative at
     /// `r - U`, so that where the iteration stops depends little on the
     /// reference (module docs): on a disc of blur 0.5 px (8 bits, 1 %
-    /// noise), references 0.4 px off give curves within 5.0e-4 px of the
+    /// noise), references 0.4 px off give curves within 4.9e-4 px of the
     /// one from the disc's own circle with global levels and 4.3e-3 px with
-    /// varying ones (measured), against 3.6e-3 and 5.4e-3 px with the
-    /// reference's derivative. (On images blurred after the pixels
-    /// integrated, whose edge is not exactly the profile, it was 8.5e-3
-    /// and 1.4e-2 px against 6.7e-2 and 7.4e-2 px.) A band with a margin of
-    /// 0.5 px, whose pixels count around the displaced curve
-    /// (`Band::build_windowed`), leaves 1.9e-5 px with global levels and
-    /// 3.7e-4 px with varying ones (measured).
+    /// varying ones (measured), against 3.9e-3 and 5.3e-3 px with the
+    /// reference's derivative. A band with a margin of 0.5 px, whose pixels
+    /// count around the displaced curve (`Band::build_windowed`), leaves
+    /// 1.9e-5 px with either level model (measured).
     #[test]
     fn the_fixed_point_hardly_depends_on_the_reference() {
         let varying = LevelModel::Varying {

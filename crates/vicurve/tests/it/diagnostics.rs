@@ -153,8 +153,7 @@ fn clean_disc_unwraps_to_a_straight_edge() {
 /// `r = -9.0e-3` px. The image blurred as a camera blurs (before the
 /// pixels integrate, `render::blur`) is the pixel-edge profile itself: the
 /// fit's residual is 4.5e-5 of the gray range and the grid's, 3.8e-4, is
-/// the interpolation's (on an image blurred after the pixels integrated,
-/// both were about 2e-3).
+/// the interpolation's.
 #[test]
 fn blurred_disc_residual_is_the_fits() {
     let s = summarise(1.0);
