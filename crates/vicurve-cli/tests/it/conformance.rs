@@ -41,10 +41,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "max 3.39e0 > 8 x scatter 2.87e-1",
     ),
     (
-        "sine-edge/blur1/noise0/8bit/bright/polyline-1.5px",
-        "scatter/sigma 1.53",
-    ),
-    (
         "sine-edge/blur2/noise1/8bit/dark/segment",
         "|bias| 3.35e-3 > 2e-3",
     ),
@@ -125,14 +121,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // theirs (ring 1.7e-3 px for 2.5e-3, line 1.3e-3 for 4.8e-3, whose
     // largest error, 2.4e-2 px, is at an end); the sine edge's bias, 2.2e-3
     // px at 2 % noise, is one image's noise.
-    (
-        "ellipse/blur1/noise0/8bit/bright/circle-10pct",
-        "scatter/sigma 2.19",
-    ),
-    (
-        "ring-line/blur2/noise0/8bit/bright/circle-10pct",
-        "scatter/sigma 0.70",
-    ),
     (
         "star-a0.2/blur1/noise0/16bit/dark/polyline-1.5px",
         "scatter/sigma 1.81",

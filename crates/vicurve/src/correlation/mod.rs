@@ -860,7 +860,10 @@ impl Correlation {
     /// systematic part, so half the mean squared difference of consecutive
     /// residuals estimates the noise variance alone (Rice's difference
     /// estimator), on at most `NOISE_PIXELS` band pixels taken at a regular
-    /// stride. Allocates: call it once per stage, not per iteration.
+    /// stride. Pixels of about the same `r` have about the same level, and
+    /// so the same rounding to the image's gray-level steps: the estimate
+    /// misses that noise ([`Sampler::rounding_variance`], which the output's
+    /// `sigma` adds). Allocates: call it once per stage, not per iteration.
     pub fn estimate_noise(&mut self, lambda: &[f64], sampler: &Sampler) -> Option<f64> {
         let band = &self.band;
         // A regular subsample bounds the cost (the sort) on wide bands; the

@@ -50,9 +50,14 @@ pub(super) struct ResidualMisfit {
 }
 
 impl ResidualMisfit {
-    /// The residuals of `corr` at `lambda` (none without a noise estimate).
+    /// The residuals of `corr` at `lambda` (none without a noise estimate),
+    /// the noise at least the rounding to the image's gray-level steps
+    /// ([`Sampler::rounding_variance`]).
     pub fn new(corr: &Correlation, lambda: &[f64], sampler: &Sampler) -> Option<Self> {
-        let noise = corr.noise_var().filter(|v| *v > 0.0)?;
+        let noise = corr
+            .noise_var()
+            .filter(|v| *v > 0.0)?
+            .max(sampler.rounding_variance());
         let bins = corr.residual_bins(lambda, sampler, BIN);
         if bins.is_empty() {
             return None;

@@ -164,7 +164,8 @@ struct SigmaTerms<'a> {
     /// Points of `x0 + U n` in an element.
     reach: usize,
     /// The settles' noise gain on the Gauss–Newton `sigma`, times the root
-    /// of the residuals' correlation factor ([`super::correlated`]).
+    /// of the residuals' correlation factor ([`super::correlated`]) and the
+    /// rounding's floor on the noise.
     gain: f64,
 }
 
@@ -203,12 +204,20 @@ impl<'a> SigmaTerms<'a> {
         let correlation = residual
             .as_ref()
             .map_or(1.0, |r| r.correlation_factor(fin.corr.basis()));
+        // The noise estimate misses the rounding to the image's gray-level
+        // steps (`Correlation::estimate_noise`): the Gauss–Newton `sigma`
+        // scales as the root of the noise variance.
+        let rounding = fin
+            .corr
+            .noise_var()
+            .filter(|v| *v > 0.0)
+            .map_or(1.0, |v| (sampler.rounding_variance() / v).max(1.0).sqrt());
         SigmaTerms {
             fin,
             residual,
             oscillation,
             reach: ((span / step.max(1e-9)).round() as usize).max(1),
-            gain: gain * correlation.sqrt(),
+            gain: gain * correlation.sqrt() * rounding,
         }
     }
 

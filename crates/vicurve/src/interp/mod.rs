@@ -94,6 +94,11 @@ impl FromStr for Interpolation {
     }
 }
 
+/// How far from a multiple of the step a pixel read through the cubic
+/// prefilter may be (in steps) and still count as one
+/// ([`Sampler::quantum`]): the prefilter's rounding is about `1e-12`.
+const QUANTUM_TOLERANCE: f64 = 1e-6;
+
 /// Padding (pixels) of the mirrored buffer on each side: the 4x4 cubic
 /// stencil at a point of the last cell reaches two pixels beyond.
 const PAD: usize = 2;
@@ -124,6 +129,8 @@ pub struct Sampler {
     coef: Arc<Vec<f64>>,
     /// [`Sampler::gray_range`], computed on first use and shared by clones.
     range: Arc<std::sync::OnceLock<f64>>,
+    /// [`Sampler::quantum`], likewise.
+    quantum: Arc<std::sync::OnceLock<Option<f64>>>,
 }
 
 impl Sampler {
@@ -171,6 +178,7 @@ impl Sampler {
             pad,
             coef,
             range: Arc::default(),
+            quantum: Arc::default(),
         }
     }
 
@@ -247,6 +255,40 @@ impl Sampler {
             let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
             at(0.995) - at(0.005)
         })
+    }
+
+    /// The step between the image's recorded gray levels when they are
+    /// those of an integer format: 1 (integer counts), 1/255 (8-bit files)
+    /// or 1/65535 (16-bit files), the coarsest of which every pixel of
+    /// [`Sampler::gray_range`]'s subsample is a multiple of; `None` for
+    /// other data (floating-point images, or levels rescaled after
+    /// reading). Computed once per image and kept.
+    ///
+    /// Why: rounding to these steps adds a noise of variance `q^2 / 12`
+    /// wherever the gray level varies from pixel to pixel by more than a
+    /// step (an edge's pixels), even in an image without any other noise.
+    pub fn quantum(&self) -> Option<f64> {
+        *self.quantum.get_or_init(|| {
+            let (w, h) = (self.width, self.height);
+            let stride = ((w * h) / 65_536).max(1);
+            let values: Vec<f64> = (0..w * h)
+                .step_by(stride)
+                .filter_map(|k| self.pixel(k % w, k / w))
+                .collect();
+            [1.0, 1.0 / 255.0, 1.0 / 65535.0].into_iter().find(|q| {
+                values.iter().all(|v| {
+                    let n = v / q;
+                    (n - n.round()).abs() < QUANTUM_TOLERANCE
+                })
+            })
+        })
+    }
+
+    /// The variance of the rounding to [`Sampler::quantum`]'s steps `q`,
+    /// `q^2 / 12` (gray levels squared; 0 without steps): the least noise
+    /// an edge's pixels carry.
+    pub fn rounding_variance(&self) -> f64 {
+        self.quantum().map_or(0.0, |q| q * q / 12.0)
     }
 
     /// Interpolated gray level and its gradient `[d/dx, d/dy]` (gray levels

@@ -37,8 +37,11 @@ const MAX_FINE_PIXELS: usize = 1 << 24;
 /// 8 under a blur of 1 px, fewer on large images: a pixel is then about
 /// `0.02 / (k sigma)^2` of the contrast off), blurred there by a Gaussian
 /// of `sigma k` fine pixels, and each pixel is the mean of its `k x k` fine
-/// pixels (the two steps as one separable kernel, the pixels beyond the
-/// border repeating the border's). `sigma <= 0` gives the coverage itself.
+/// pixels (the two steps as one separable kernel). The scene is rendered
+/// on a margin as wide as the kernel around the image, so that the light
+/// from beyond the border is the scene's, as in a camera (repeating the
+/// border's pixels instead bends an edge that crosses the border within
+/// the blur's reach). `sigma <= 0` gives the coverage itself.
 ///
 /// Errors: those of [`polygon_coverage`]; [`Error::InvalidParameter`]
 /// unless `sigma <= 1000`.
@@ -62,11 +65,14 @@ pub fn blurred_coverage(
     } else {
         SUPERSAMPLE
     };
-    while k > 2 && (k * k).saturating_mul(width).saturating_mul(height) > MAX_FINE_PIXELS {
+    let margin = reach(sigma);
+    let (pw, ph) = (width + 2 * margin, height + 2 * margin);
+    while k > 2 && (k * k).saturating_mul(pw).saturating_mul(ph) > MAX_FINE_PIXELS {
         k /= 2;
     }
-    // Fine pixel `X` has its centre at `(X + 1/2) / k - 1/2` in pixels.
-    let offset = 0.5 * (k as f64 - 1.0);
+    // Fine pixel `X` has its centre at `(X + 1/2) / k - 1/2 - margin` in
+    // pixels.
+    let offset = 0.5 * (k as f64 - 1.0) + (k * margin) as f64;
     let fine: Vec<Vec<[f64; 2]>> = rings
         .iter()
         .map(|ring| {
@@ -75,9 +81,11 @@ pub fn blurred_coverage(
                 .collect()
         })
         .collect();
-    let (fw, fh) = (width * k, height * k);
+    let (fw, fh) = (pw * k, ph * k);
     let cov = polygon_coverage(fw, fh, &fine)?;
     let (kernel, start) = pixel_kernel(sigma, k);
+    // Pixel `x` of the image is pixel `x + margin` of the fine grid's.
+    let start = start + (k * margin) as isize;
     // Rows: each fine row to the pixels' columns.
     let mut rows = vec![0.0; fh * width];
     rows.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
@@ -103,6 +111,19 @@ pub fn blurred_coverage(
         }
     });
     Ok(out)
+}
+
+/// How far beyond the image [`blurred_coverage`] renders the scene under
+/// a blur of `sigma` px: the kernel's reach (`gaussian_kernel`'s `5
+/// sigma`) and one pixel for the pixel's own width, pixels. A region that
+/// should look unbounded (an edge crossing the image) must extend at least
+/// this far beyond the image.
+pub fn reach(sigma: f64) -> usize {
+    if sigma > 0.0 && sigma.is_finite() {
+        (5.0 * sigma).ceil() as usize + 1
+    } else {
+        0
+    }
 }
 
 /// The weights of the fine samples that make one pixel of

@@ -16,7 +16,8 @@ pub const SAGITTA: f64 = 1e-7;
 /// Largest chord, px, where the curve is (nearly) straight.
 const MAX_CHORD: f64 = 0.5;
 
-/// How far the polygons of the infinite sine go beyond the image, px.
+/// How far the polygons of the infinite sine go beyond the image and the
+/// blur's reach ([`super::blur::reach`]), px.
 const MARGIN: f64 = 3.0;
 
 /// Upper bound on the number of vertices (memory guard).
@@ -42,13 +43,14 @@ pub fn region_rings(spec: &RenderSpec) -> Result<Vec<Vec<[f64; 2]>>> {
     match (shape, spec.kind) {
         (Shape::Sine { amplitude, y0, .. }, kind) => {
             let extra = if kind == Kind::Contour { h } else { 0.0 };
-            let xa = -0.5 - MARGIN - extra;
-            let xb = spec.width as f64 - 0.5 + MARGIN + extra;
+            let margin = MARGIN + super::blur::reach(spec.blur_sigma) as f64;
+            let xa = -0.5 - margin - extra;
+            let xb = spec.width as f64 - 0.5 + margin + extra;
             match kind {
                 Kind::Silhouette => {
                     let mut ring = Vec::new();
                     offset_curve(shape, 0.0, xa, xb, true, &mut ring)?;
-                    let top = (-0.5 - MARGIN).min(y0 - amplitude.abs() - MARGIN);
+                    let top = (-0.5 - margin).min(y0 - amplitude.abs() - margin);
                     ring.push([xb, top]);
                     ring.push([xa, top]);
                     Ok(vec![ring])

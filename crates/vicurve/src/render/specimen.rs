@@ -18,7 +18,8 @@ use crate::truth::specimen::{Edge, NeckedBar};
 /// Largest chord, px, where the edges are (nearly) straight.
 const MAX_CHORD: f64 = 0.5;
 
-/// How far the polygon goes beyond the image's left and right sides, px.
+/// How far the polygon goes beyond the image's left and right sides and
+/// the blur's reach ([`super::blur::reach`]), px.
 const MARGIN: f64 = 3.0;
 
 /// Everything that defines a synthetic specimen image; serialisable, and
@@ -78,8 +79,9 @@ impl SpecimenSpec {
 /// million vertices.
 pub fn bar_ring(spec: &SpecimenSpec) -> Result<Vec<[f64; 2]>> {
     let bar = &spec.bar;
-    let xa = -0.5 - MARGIN;
-    let xb = spec.width as f64 - 0.5 + MARGIN;
+    let margin = MARGIN + super::blur::reach(spec.blur_sigma) as f64;
+    let xa = -0.5 - margin;
+    let xb = spec.width as f64 - 0.5 + margin;
     let mut xs = vec![xa];
     let mut x = xa;
     // |y''| <= neck / neck_length², and the speed is at least 1: a chord of

@@ -389,3 +389,22 @@ fn a_sampler_keeps_its_pixels_when_the_image_changes() {
     assert_eq!(s.pixel(1, 1), Some(11.0));
     assert!((s.value(1.5, 1.0).unwrap() - 11.5).abs() < 1e-12);
 }
+
+/// The gray-level step of an image read from an integer format is found
+/// for every interpolation kind (the cubic one reads its pixels back
+/// through the prefilter); rescaled or floating data have none.
+#[test]
+fn the_quantum_of_integer_levels_is_found() {
+    let levels = |q: f64| image_from(37, 23, move |x, y| ((x * 7.0 + y * 13.0) % 200.0 + 3.0) * q);
+    for kind in KINDS {
+        let at = |img: &Image| Sampler::new(img, kind).quantum();
+        assert_eq!(at(&levels(1.0 / 255.0)), Some(1.0 / 255.0), "{kind:?}");
+        assert_eq!(at(&levels(1.0 / 65535.0)), Some(1.0 / 65535.0), "{kind:?}");
+        assert_eq!(at(&levels(1.0)), Some(1.0), "{kind:?}");
+        // 8-bit levels in a 16-bit file (steps of 257): still 1/255.
+        assert_eq!(at(&levels(257.0 / 65535.0)), Some(1.0 / 255.0), "{kind:?}");
+        assert_eq!(at(&levels(0.9 / 255.0)), None, "{kind:?}");
+        let float = image_from(37, 23, |x, y| (0.1 * x).sin() * (0.07 * y).cos());
+        assert_eq!(at(&float), None, "{kind:?}");
+    }
+}

@@ -675,3 +675,52 @@ fn blur_before_the_pixels_integrate_matches_the_analytic_edge() {
     println!("blurred after the pixels integrate, blur 1: {worst_old:.1e}");
     assert!(worst_old > 1e-2, "{worst_old}");
 }
+
+/// A camera sees the scene beyond the image's border too: an oblique
+/// blurred edge that crosses the border has, in the border's pixels, the
+/// values of the infinite edge (each pixel the mean of `Phi(d / sigma)`
+/// over its square, `d` the signed distance to the edge, by a 200 x 200
+/// midpoint rule), as in the middle. Repeating the border's pixels
+/// instead bends the edge within the blur's reach.
+#[test]
+fn an_edge_crossing_the_border_stays_straight_to_the_border() {
+    let (w, h) = (40, 24);
+    let (y0, slope) = (11.3, 0.3);
+    let line = |x: f64| y0 + slope * (x - 20.0);
+    let ring = vec![
+        [-100.0, line(-100.0)],
+        [140.0, line(140.0)],
+        [140.0, 200.0],
+        [-100.0, 200.0],
+    ];
+    let norm = (1.0 + slope * slope).sqrt();
+    let cdf = |t: f64| 0.5 * libm::erfc(-t / std::f64::consts::SQRT_2);
+    for sigma in [1.0, 2.0, 4.0] {
+        let got = vicurve::render::blur::blurred_coverage(w, h, std::slice::from_ref(&ring), sigma)
+            .unwrap();
+        let n = 200;
+        let (mut worst_border, mut worst_middle): (f64, f64) = (0.0, 0.0);
+        for j in 0..h {
+            for i in 0..w {
+                let mut want = 0.0;
+                for a in 0..n {
+                    for b in 0..n {
+                        let x = i as f64 - 0.5 + (a as f64 + 0.5) / n as f64;
+                        let y = j as f64 - 0.5 + (b as f64 + 0.5) / n as f64;
+                        want += cdf((y - line(x)) / norm / sigma);
+                    }
+                }
+                want /= (n * n) as f64;
+                let err = (got[j * w + i] - want).abs();
+                if i < 3 || i + 3 >= w {
+                    worst_border = worst_border.max(err);
+                } else {
+                    worst_middle = worst_middle.max(err);
+                }
+            }
+        }
+        println!("blur {sigma}: border {worst_border:.1e}, middle {worst_middle:.1e}");
+        assert!(worst_border < 2e-3, "blur {sigma}: border {worst_border}");
+        assert!(worst_border < 3.0 * worst_middle + 1e-4, "blur {sigma}");
+    }
+}

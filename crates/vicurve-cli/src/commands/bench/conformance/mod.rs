@@ -36,8 +36,9 @@ pub struct ConformanceArgs {
     /// Also write each measured case's samples with their signed error to
     /// the truth (`OUT/samples/ID.csv`, the id's `/` as `_`), to see where
     /// a case fails, and what measures it again with `vicurve measure`:
-    /// its image (`ID.png`) and its start's points (`ID.start.csv`, for
-    /// `--init polyline:`).
+    /// its image (`ID.png`), its start's points (`ID.start.csv`, for
+    /// `--init polyline:`) and its truth (`ID.truth.json`, for `vicurve
+    /// eval`).
     #[arg(long)]
     samples: bool,
 }
@@ -162,10 +163,11 @@ fn run_image(group: &[Case], samples: Option<&std::path::Path>) -> Vec<Row> {
         .collect()
 }
 
-/// What a user needs to measure `case` again with the CLI: its image
-/// (`STEM.png`, at the case's depth) and its start (`STEM.start.csv`, the
-/// start's points for `--init polyline:` with `--closed` when it is
-/// closed; an automatic start has none).
+/// What a user needs to measure `case` again with the CLI and score it:
+/// its image (`STEM.png`, at the case's depth), its truth
+/// (`STEM.truth.json`, for `vicurve eval`) and its start
+/// (`STEM.start.csv`, the start's points for `--init polyline:` with
+/// `--closed` when it is closed; an automatic start has none).
 fn reproduction(
     case: &Case,
     image: &Image,
@@ -175,6 +177,10 @@ fn reproduction(
     let png = dir.join(format!("{stem}.png"));
     vicurve::io::save_image(&png, image, case.image.bits)
         .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
+    let truth = dir.join(format!("{stem}.truth.json"));
+    vicurve::render::Truth::from_spec(&case.image.spec)
+        .save(&truth)
+        .map_err(|e| format!("cannot write {}: {e}", truth.display()))?;
     if case.start == cases::Start::Auto {
         return Ok(());
     }
