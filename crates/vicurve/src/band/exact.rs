@@ -21,15 +21,18 @@ impl Pixels<'_> {
         // of its nearest chord, which the grid reaches with a pixel to
         // spare; only such pixels need the exact projection.
         let sagitta = chords.sagitta();
-        let grid = GridShape::around(
-            self.curve,
-            self.reach + sagitta + 1.0,
-            self.width,
-            self.height,
-        );
+        let grid = GridShape {
+            thin: self.thin,
+            ..GridShape::around(
+                self.curve,
+                self.reach + sagitta + 1.0,
+                self.width,
+                self.height,
+            )
+        };
         let mut touched = scratch.rasterize(&chords, &grid);
         // Raster order, whatever order the chords reached the cells in.
-        touched.par_sort_unstable();
+        radix_sort(&mut touched);
         let cutoff2 = (self.reach + sagitta + 1e-6).powi(2);
         let rows = self.project_cells(&grid, scratch.nearest(), &touched, cutoff2);
         scratch.clear(&touched);
@@ -62,10 +65,13 @@ impl Pixels<'_> {
         touched
             .par_chunks(TOUCHED_CHUNK)
             .map(|cells| {
-                cells
-                    .iter()
-                    .filter_map(|&c| self.project_cell(&cell, c as usize))
-                    .collect()
+                let mut out = Vec::with_capacity(cells.len());
+                out.extend(
+                    cells
+                        .iter()
+                        .filter_map(|&c| self.project_cell(&cell, c as usize)),
+                );
+                out
             })
             .collect()
     }
@@ -118,4 +124,58 @@ struct CellSearch<'a> {
     nearest: &'a [u64],
     cutoff2: f64,
     clearances: &'a [Clearance],
+}
+
+/// Sort distinct cell indices ascending (LSD radix, 11 bits a pass; the
+/// same order as a comparison sort).
+fn radix_sort(v: &mut Vec<u32>) {
+    const BITS: u32 = 11;
+    const BUCKETS: usize = 1 << BITS;
+    let max = v.iter().copied().max().unwrap_or(0);
+    let mut buf = vec![0u32; v.len()];
+    let mut shift = 0;
+    while shift < 32 && (shift == 0 || (max >> shift) > 0) {
+        let mut counts = [0usize; BUCKETS];
+        for &x in v.iter() {
+            counts[((x >> shift) as usize) & (BUCKETS - 1)] += 1;
+        }
+        let mut sum = 0;
+        for c in counts.iter_mut() {
+            let k = *c;
+            *c = sum;
+            sum += k;
+        }
+        for &x in v.iter() {
+            let b = ((x >> shift) as usize) & (BUCKETS - 1);
+            buf[counts[b]] = x;
+            counts[b] += 1;
+        }
+        std::mem::swap(v, &mut buf);
+        shift += BITS;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::radix_sort;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The radix sort orders distinct cell indices as a comparison
+        /// sort does, whatever their range (one to three passes).
+        #[test]
+        fn the_radix_sort_is_a_sort(
+            cells in prop::collection::hash_set(any::<u32>(), 0..3000),
+            shift in 0u32..24,
+        ) {
+            let mut v: Vec<u32> = cells.into_iter().map(|c| c >> shift).collect();
+            v.sort_unstable();
+            v.dedup();
+            let mut want = v.clone();
+            v.reverse();
+            radix_sort(&mut v);
+            want.sort_unstable();
+            prop_assert_eq!(v, want);
+        }
+    }
 }

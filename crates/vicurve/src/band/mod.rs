@@ -235,6 +235,29 @@ impl Band {
         band
     }
 
+    /// The same band (pixels, coordinates, profile, weights) on another
+    /// displacement basis of the same reference: only the basis values are
+    /// evaluated again, at the pixels' stored `s` (a refinement's finer
+    /// basis, without the projection of every pixel). It is the band
+    /// [`Band::build_with`] makes for `basis` when this one was made by it
+    /// on the same reference, half-width, profile and coordinates,
+    /// unthinned, and no robust factor entered its weights.
+    pub(crate) fn rebased(&self, basis: &Basis) -> Band {
+        let p = basis.degree();
+        let mut b = self.clone();
+        b.degree = p;
+        b.first.clear();
+        b.basis.clear();
+        b.basis.reserve(self.s.len() * (p + 1));
+        let mut values = [0.0; crate::spline::MAX_DEGREE + 1];
+        for &s in &self.s {
+            let first = basis.eval(s, &mut values) as u32;
+            b.first.push(first);
+            b.basis.extend_from_slice(&values[..=p]);
+        }
+        b
+    }
+
     /// Number of pixels in the band.
     pub fn len(&self) -> usize {
         self.pos.len()
@@ -320,4 +343,46 @@ fn displacement(basis: &Basis, first: u32, values: &[f64], lambda: &[f64]) -> f6
         .enumerate()
         .map(|(k, v)| lambda[basis.index(first, k)] * v)
         .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Band, Coords};
+    use crate::curve::SplineCurve;
+    use crate::spline::Basis;
+    use crate::virtual_image::{Kind, Profile};
+
+    /// A band rebased on a finer basis of its reference (a refinement's
+    /// halving) is, to the bit, the band built on that basis: the same
+    /// pixels, coordinates, profile, weights and basis values.
+    #[test]
+    fn a_rebased_band_is_the_band_built_on_its_basis() {
+        let pts: Vec<[f64; 2]> = (0..400)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / 400.0;
+                [
+                    120.3 + 70.0 * t.cos() + 6.0 * (5.0 * t).cos(),
+                    110.7 + 50.0 * t.sin(),
+                ]
+            })
+            .collect();
+        let curve = SplineCurve::fit(&pts, true, 3, 4.0).unwrap();
+        let basis = |n: usize| Basis::new(3, n, curve.param_length(), true).unwrap();
+        let profiles = [
+            Profile::Paper {
+                kind: Kind::Silhouette,
+            },
+            Profile::PixelEdge { blur: 1.2 },
+        ];
+        for profile in profiles {
+            let build =
+                |b: &Basis| Band::build_with(&curve, b, 3.0, profile, 240, 220, 1, Coords::Exact);
+            let coarse = build(&basis(12)).unwrap();
+            let fine = basis(24);
+            let rebased = coarse.rebased(&fine);
+            let built = build(&fine).unwrap();
+            assert!(built.len() > 1000, "{}", built.len());
+            assert_eq!(format!("{rebased:?}"), format!("{built:?}"), "{profile:?}");
+        }
+    }
 }

@@ -132,6 +132,9 @@ pub(super) struct GridShape {
     pub gw: usize,
     pub gh: usize,
     pub reach: f64,
+    /// Keep one cell in `thin` (as `Pixels::thinned_out`): 1 all, 2 a
+    /// checkerboard (x + y even), 4 even x and even y.
+    pub thin: usize,
 }
 
 impl GridShape {
@@ -152,6 +155,7 @@ impl GridShape {
             gw: gx1 + 1 - gx0,
             gh: gy1 + 1 - gy0,
             reach,
+            thin: 1,
         }
     }
 }
@@ -313,7 +317,15 @@ impl Chords {
         };
         let y_lo = ((a[1].min(b[1]) - reach - ext).floor().max(grid.gy0 as f64)) as usize;
         let y_hi = ((a[1].max(b[1]) + reach + ext).ceil().min(grid.gy1 as f64)) as usize;
+        let thin = match grid.thin {
+            0 | 1 => 1,
+            2 | 3 => 2,
+            _ => 4,
+        };
         for y in y_lo..=y_hi {
+            if thin == 4 && y % 2 == 1 {
+                continue;
+            }
             let py = y as f64 - a[1];
             let (x_min, x_max) = box_.row_span(py);
             if x_min > x_max {
@@ -325,7 +337,16 @@ impl Chords {
                 continue;
             }
             let row = (y - grid.gy0) * grid.gw;
-            for x in x_lo..=x_hi as usize {
+            // First kept x at or after x_lo.
+            let (x_first, step) = match thin {
+                1 => (x_lo, 1),
+                2 => (x_lo + ((x_lo + y) % 2), 2),
+                _ => (x_lo + (x_lo % 2), 2),
+            };
+            if x_first as f64 > x_hi {
+                continue;
+            }
+            for x in (x_first..=x_hi as usize).step_by(step) {
                 let cell = row + x - grid.gx0;
                 let packed = chord.packed_foot(x as f64 - a[0], py);
                 let old = best[cell];

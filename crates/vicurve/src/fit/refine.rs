@@ -29,6 +29,10 @@ pub(super) struct RefineBand {
     pub half_width: f64,
     /// The stage's virtual profile.
     pub profile: Profile,
+    /// Whether the fit's own band is that band (unthinned, no margin; see
+    /// `Band::rebased` for when it is reused): it is then rebased on the
+    /// finer basis instead of built again.
+    pub reuse: bool,
 }
 
 /// Refine `fit` on `reference` down to elements of `shortest` pixels.
@@ -82,16 +86,20 @@ pub(super) fn refine(
         }
         let n_el = ((length / h).round() as usize).max(min_el);
         let basis = breaks::displacement_basis(reference, config.degree, n_el)?;
-        let Ok(built) = Band::build_with(
-            reference,
-            &basis,
-            band.half_width,
-            band.profile,
-            sampler.width(),
-            sampler.height(),
-            1,
-            config.coords,
-        ) else {
+        let reusable = band.reuse && corr.band().margin() == 0.0 && !corr.reweighted();
+        let rebased = reusable.then(|| corr.band().rebased(&basis));
+        let Ok(built) = rebased.map(Ok).unwrap_or_else(|| {
+            Band::build_with(
+                reference,
+                &basis,
+                band.half_width,
+                band.profile,
+                sampler.width(),
+                sampler.height(),
+                1,
+                config.coords,
+            )
+        }) else {
             break;
         };
         let Ok(mut fine) = Correlation::prepare(built, basis, sampler, config.levels, None) else {

@@ -818,6 +818,7 @@ impl Schedule<'_> {
                 RefineBand {
                     half_width: r,
                     profile,
+                    reuse: st.is_last,
                 },
                 &mut st.history,
             )?;
