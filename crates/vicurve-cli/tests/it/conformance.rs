@@ -112,15 +112,14 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // of pixel-integrated coverage added an error that depends on where an
     // edge crosses the pixels (a ring line measured on it scattered by
     // 5.7e-3 px, on the camera's image by 1.2e-4 px). Errors and sigmas
-    // changed with it, and these five noiseless or marginal cases now fail:
-    // the ellipse's scatter rose from 1.19e-3 to 1.92e-3 px with the 8-bit
-    // rounding of another image while its bias fell from 4.9e-4 to 3.9e-5
-    // px; the star's scatter fell from 2.5e-3 to 7.0e-4 px, below what the
-    // misfit term of its sigma (3.9e-4 px) says; the rings' and lines'
-    // misfit sigma, set on the old images' errors, is now larger than
-    // theirs (ring 1.7e-3 px for 2.5e-3, line 1.3e-3 for 4.8e-3, whose
-    // largest error, 2.4e-2 px, is at an end); the sine edge's bias, 2.2e-3
-    // px at 2 % noise, is one image's noise.
+    // changed with it, and these three noiseless or marginal cases fail:
+    // the star's scatter fell from 2.5e-3 to 7.0e-4 px, below what the
+    // misfit term of its sigma (3.9e-4 px) says; the line's misfit sigma,
+    // set on the old images' errors, is now larger than its scatter (1.3e-3
+    // px for 4.8e-3), whose largest error, 2.4e-2 px, is at an end; the sine
+    // edge's bias, 2.2e-3 px at 2 % noise, is one image's noise. (An
+    // ellipse and a ring that failed with them pass since sigma counts the
+    // rounding of 8-bit levels.)
     (
         "star-a0.2/blur1/noise0/16bit/dark/polyline-1.5px",
         "scatter/sigma 1.81",
