@@ -235,13 +235,19 @@ impl Band {
         band
     }
 
+    /// Whether [`Band::bend_to`] gave the band another curve's curvature.
+    pub(crate) fn is_bent(&self) -> bool {
+        !self.reference_curvature.is_empty()
+    }
+
     /// The same band (pixels, coordinates, profile, weights) on another
     /// displacement basis of the same reference: only the basis values are
     /// evaluated again, at the pixels' stored `s` (a refinement's finer
     /// basis, without the projection of every pixel). It is the band
     /// [`Band::build_with`] makes for `basis` when this one was made by it
     /// on the same reference, half-width, profile and coordinates,
-    /// unthinned, and no robust factor entered its weights.
+    /// unthinned, not bent ([`Band::is_bent`]), and no robust factor
+    /// entered its weights.
     pub(crate) fn rebased(&self, basis: &Basis) -> Band {
         let p = basis.degree();
         let mut b = self.clone();

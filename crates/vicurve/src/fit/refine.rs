@@ -86,7 +86,10 @@ pub(super) fn refine(
         }
         let n_el = ((length / h).round() as usize).max(min_el);
         let basis = breaks::displacement_basis(reference, config.degree, n_el)?;
-        let reusable = band.reuse && corr.band().margin() == 0.0 && !corr.reweighted();
+        let reusable = band.reuse
+            && corr.band().margin() == 0.0
+            && !corr.band().is_bent()
+            && !corr.reweighted();
         let rebased = reusable.then(|| corr.band().rebased(&basis));
         let Ok(built) = rebased.map(Ok).unwrap_or_else(|| {
             Band::build_with(
