@@ -242,12 +242,7 @@ impl Sampler {
     /// kept (every fit of the image's objects asks for it).
     pub fn gray_range(&self) -> f64 {
         *self.range.get_or_init(|| {
-            let (w, h) = (self.width, self.height);
-            let stride = ((w * h) / 65_536).max(1);
-            let mut values: Vec<f64> = (0..w * h)
-                .step_by(stride)
-                .filter_map(|k| self.pixel(k % w, k / w))
-                .collect();
+            let mut values = self.subsample();
             if values.is_empty() {
                 return 0.0;
             }
@@ -269,12 +264,7 @@ impl Sampler {
     /// step (an edge's pixels), even in an image without any other noise.
     pub fn quantum(&self) -> Option<f64> {
         *self.quantum.get_or_init(|| {
-            let (w, h) = (self.width, self.height);
-            let stride = ((w * h) / 65_536).max(1);
-            let values: Vec<f64> = (0..w * h)
-                .step_by(stride)
-                .filter_map(|k| self.pixel(k % w, k / w))
-                .collect();
+            let values = self.subsample();
             [1.0, 1.0 / 255.0, 1.0 / 65535.0].into_iter().find(|q| {
                 values.iter().all(|v| {
                     let n = v / q;
@@ -282,6 +272,17 @@ impl Sampler {
                 })
             })
         })
+    }
+
+    /// The recorded levels of a regular subsample of at most about 65,536
+    /// pixels, in raster order ([`Sampler::gray_range`], [`Sampler::quantum`]).
+    fn subsample(&self) -> Vec<f64> {
+        let (w, h) = (self.width, self.height);
+        let stride = ((w * h) / 65_536).max(1);
+        (0..w * h)
+            .step_by(stride)
+            .filter_map(|k| self.pixel(k % w, k / w))
+            .collect()
     }
 
     /// The variance of the rounding to [`Sampler::quantum`]'s steps `q`,

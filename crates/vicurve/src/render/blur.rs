@@ -24,6 +24,8 @@ use crate::render::coverage::polygon_coverage;
 const SUPERSAMPLE: usize = 4;
 /// See [`SUPERSAMPLE`], pixels.
 const FINER_BELOW: f64 = 1.0;
+/// Reach of [`gaussian_kernel`], in standard deviations.
+const KERNEL_SIGMAS: f64 = 5.0;
 /// Fine pixels at most (their coverage is held in memory, 8 bytes each):
 /// larger images take fewer fine samples, down to 2 per axis.
 const MAX_FINE_PIXELS: usize = 1 << 24;
@@ -114,13 +116,13 @@ pub fn blurred_coverage(
 }
 
 /// How far beyond the image [`blurred_coverage`] renders the scene under
-/// a blur of `sigma` px: the kernel's reach (`gaussian_kernel`'s `5
+/// a blur of `sigma` px: the kernel's reach ([`gaussian_kernel`]'s `5
 /// sigma`) and one pixel for the pixel's own width, pixels. A region that
 /// should look unbounded (an edge crossing the image) must extend at least
 /// this far beyond the image.
 pub fn reach(sigma: f64) -> usize {
     if sigma > 0.0 && sigma.is_finite() {
-        (5.0 * sigma).ceil() as usize + 1
+        (KERNEL_SIGMAS * sigma).ceil() as usize + 1
     } else {
         0
     }
@@ -150,7 +152,7 @@ pub fn gaussian_kernel(sigma: f64) -> Vec<f64> {
     if !(sigma > 0.0 && sigma.is_finite()) {
         return vec![1.0];
     }
-    let radius = (5.0 * sigma).ceil() as usize;
+    let radius = (KERNEL_SIGMAS * sigma).ceil() as usize;
     let mut k: Vec<f64> = (0..=2 * radius)
         .map(|i| {
             let x = i as f64 - radius as f64;

@@ -238,14 +238,7 @@ impl RenderSpec {
 pub fn render(spec: &RenderSpec) -> Result<Image> {
     spec.validate()?;
     let size = (spec.width, spec.height);
-    let rendering = scene::Rendering {
-        foreground: spec.foreground,
-        background: spec.background,
-        blur_sigma: spec.blur_sigma,
-        noise: spec.noise,
-        seed: spec.seed,
-        bits: spec.bits,
-    };
+    let rendering = scene::Rendering::of(spec);
     match spec.method {
         Method::Coverage => scene::paint(&shapes::region_rings(spec)?, size, &rendering),
         Method::Profile { half_width } => {

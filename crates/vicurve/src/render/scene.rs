@@ -78,6 +78,18 @@ impl Rendering {
             bits: Some(8),
         }
     }
+
+    /// The levels, blur, noise and depth of `spec`.
+    pub fn of(spec: &super::RenderSpec) -> Rendering {
+        Rendering {
+            foreground: spec.foreground,
+            background: spec.background,
+            blur_sigma: spec.blur_sigma,
+            noise: spec.noise,
+            seed: spec.seed,
+            bits: spec.bits,
+        }
+    }
 }
 
 /// A scene: its shapes and how it is rendered. It is its own truth file

@@ -55,7 +55,14 @@ impl SpecimenSpec {
     /// Errors: [`Error::InvalidParameter`] naming the field.
     pub fn validate(&self) -> Result<()> {
         // The shared checks, through a render spec with the same fields.
-        let common = super::RenderSpec {
+        self.common().validate()?;
+        self.bar.validate()
+    }
+
+    /// A render spec with this one's size, levels, blur, noise and depth
+    /// (the rest default).
+    fn common(&self) -> super::RenderSpec {
+        super::RenderSpec {
             width: self.width,
             height: self.height,
             foreground: self.foreground,
@@ -65,9 +72,7 @@ impl SpecimenSpec {
             seed: self.seed,
             bits: self.bits,
             ..super::RenderSpec::default()
-        };
-        common.validate()?;
-        self.bar.validate()
+        }
     }
 }
 
@@ -117,14 +122,7 @@ pub fn bar_ring(spec: &SpecimenSpec) -> Result<Vec<[f64; 2]>> {
 /// Errors: those of [`SpecimenSpec::validate`] and [`bar_ring`].
 pub fn render_specimen(spec: &SpecimenSpec) -> Result<Image> {
     spec.validate()?;
-    let rendering = Rendering {
-        foreground: spec.foreground,
-        background: spec.background,
-        blur_sigma: spec.blur_sigma,
-        noise: spec.noise,
-        seed: spec.seed,
-        bits: spec.bits,
-    };
+    let rendering = Rendering::of(&spec.common());
     paint(&[bar_ring(spec)?], (spec.width, spec.height), &rendering)
 }
 
