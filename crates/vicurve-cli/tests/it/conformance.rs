@@ -267,10 +267,12 @@ fn centroid(csv: &str) -> [f64; 2] {
     [mean("x"), mean("y")]
 }
 
-/// `--samples` writes, for each case, its samples, its image and its
-/// start's points, and `vicurve measure` on those measures the same curve
-/// again (the start is the circle's points 1 px apart, not the circle, so
-/// the two agree to a fraction of the scatter, not exactly).
+/// `--samples` writes, for each case, its samples, its image, its
+/// start's points and its truth: `vicurve measure` on those measures the
+/// same curve again (the start is the circle's points 1 px apart, not the
+/// circle, so the two agree to a fraction of the scatter, not exactly),
+/// and `vicurve eval` of the samples against the truth gives the bias and
+/// scatter of the case's row.
 #[test]
 fn conformance_samples_measure_again_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -306,4 +308,24 @@ fn conformance_samples_measure_again_from_the_command_line() {
         (a[0] - b[0]).abs() < 1e-3 && (a[1] - b[1]).abs() < 1e-3,
         "{a:?} vs {b:?}"
     );
+    let stats = file("eval.json");
+    ok(&vicurve(&[
+        "eval",
+        &file("csv"),
+        &file("truth.json"),
+        "--json",
+        &stats,
+    ]));
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let csv = std::fs::read_to_string(dir.path().join("conformance.csv")).unwrap();
+    let rows = read_rows(&csv);
+    let row = rows.iter().find(|r| r["id"] == id).unwrap();
+    for key in ["bias", "scatter"] {
+        let (got, want) = (
+            stats[key].as_f64().unwrap(),
+            row[key].parse::<f64>().unwrap(),
+        );
+        assert!((got - want).abs() <= 1e-12, "{key}: {got} vs {want}");
+    }
 }
