@@ -44,6 +44,22 @@ const PIXEL_EDGE_REACH: f64 = 2.0;
 const PIXEL_EDGE_PLATEAU: f64 = 0.5;
 /// See [`PIXEL_EDGE_REACH`], pixels.
 const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
+/// On a noisy image the pixel-edge band reaches at least this many spreads
+/// `sqrt(v)` (`v = blur^2 + 1/12`) each side. The displacement's profile,
+/// a bell of unit area, overlaps the flat levels' constant with a squared
+/// correlation of `sqrt(pi v) / R` on a band of half-width `R`: the levels
+/// fitted on the band take that share of the information on the curve's
+/// mean displacement (a disc's radius, a specimen's width) with them: 0.69
+/// on the narrow band at a 2 px blur, which leaves the mean `1 / sqrt(1 -
+/// 0.69) = 1.8` times the scatter the noise alone would give it. At `3
+/// sqrt(pi) = 5.3` spreads the share is 1/3 (1.22 times), for about twice
+/// the band's pixels. Only on noisy images ([`pixel_edge_band_for`]).
+const NOISY_BAND_SPREADS: f64 = 5.3;
+/// Noise (standard deviation, a fraction of the contrast) from which the
+/// pixel-edge band widens ([`pixel_edge_band_for`]): below it the noise
+/// moves the curve's mean by a few 1e-4 px at most, not worth a wider
+/// band.
+const NOISY: f64 = 2e-3;
 
 /// The spread of the edge (silhouettes) or line (contours) around
 /// `curve` ([`psf::edge_spread`], [`psf::line_spread`]). An edge's search is
@@ -150,10 +166,46 @@ pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 
 }
 
 /// Half-width of the band of the pixel-edge stage for an optical blur of
-/// `blur` pixels (see the constants), rounded up to a quarter pixel.
+/// `blur` pixels (see the constants), rounded up to a quarter pixel: narrow,
+/// for noiseless images whose flat levels may sit between two gray levels.
 pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
     let r = std::f64::consts::FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
     (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
+}
+
+/// Half-width of the band of the pixel-edge stage (pixels, a quarter pixel
+/// multiple) for an optical blur of `blur` pixels on an image whose noise
+/// has the standard deviation `noise` (gray levels,
+/// [`Sampler::pixel_noise`]), of `contrast` (gray levels; `None`: unknown)
+/// and whose gray levels come in steps of `quantum` (`None`: continuous),
+/// at most `limit` pixels (what the curve leaves clear) unless the narrow
+/// band is wider.
+///
+/// Noise of at least half a gray-level step dithers the rounding of the
+/// flat levels; if it also reaches [`NOISY`] of the contrast, the band
+/// reaches [`NOISY_BAND_SPREADS`], so that the levels cost the curve's
+/// mean position little. Otherwise (a noiseless 8-bit image, an unknown
+/// contrast) the band stays narrow: a flat level rounded the same way over
+/// the whole plateau would pull the curve by up to half a gray level's
+/// worth, the more the wider the plateau's share (see the constants), and
+/// without noise there is nothing to gain.
+pub(crate) fn pixel_edge_band_for(
+    blur: f64,
+    noise: f64,
+    contrast: Option<f64>,
+    quantum: Option<f64>,
+    limit: f64,
+) -> f64 {
+    let narrow = pixel_edge_band(blur);
+    let noisy = contrast.is_some_and(|c| {
+        noise >= 0.5 * quantum.unwrap_or(0.0) && noise >= NOISY * c.abs() && noise > 0.0
+    });
+    if !noisy {
+        return narrow;
+    }
+    let spread = (blur * blur + 1.0 / 12.0).sqrt();
+    let wide = (NOISY_BAND_SPREADS * spread).min(limit);
+    narrow.max((wide * 4.0).ceil() / 4.0)
 }
 
 /// The element length (pixels) at which the local curvature's loop gain

@@ -5,7 +5,7 @@
 //! frame's band is kept for the next frame.
 
 use super::blur::{
-    estimate_spread, matched_band, pixel_edge_band, shortest_element, BAND_MISMATCH,
+    estimate_spread, matched_band, pixel_edge_band_for, shortest_element, BAND_MISMATCH,
     MIN_EDGE_FIT_QUALITY,
 };
 use super::loops;
@@ -233,13 +233,39 @@ impl<'s> Schedule<'s> {
     /// `r` at most half the radius of a circle of the same length (half
     /// the length of an open curve).
     pub(super) fn fits_band(&self, r: f64) -> bool {
+        r <= self.band_limit()
+    }
+
+    /// The widest band half-width (pixels) that keeps the current curve's
+    /// band clear of its other parts: [`Self::band_limit`], at most half
+    /// the smallest radius of curvature (sampled every pixel of the
+    /// parameter), and 0 for a curve with corners, where a band's plateau
+    /// would take in the edge beyond the corner, and for an open curve,
+    /// whose ends are trimmed where the band leaves the image (a wider band
+    /// would keep them further from the border).
+    fn clear_band_limit(&self) -> f64 {
+        let curve = &self.current;
+        if !curve.is_closed() || !curve.corners().is_empty() {
+            return 0.0;
+        }
+        let l = curve.param_length();
+        let n = l.ceil().max(1.0) as usize;
+        let largest = (0..n)
+            .map(|i| curve.frame(i as f64 * l / n as f64).curvature.abs())
+            .fold(0.0, f64::max);
+        self.band_limit().min(0.5 / largest)
+    }
+
+    /// The widest band half-width that suits the current curve (pixels,
+    /// see [`Self::fits_band`]).
+    fn band_limit(&self) -> f64 {
         let length = self.current.arc_length();
         let size = if self.current.is_closed() {
             length / TAU
         } else {
             length
         };
-        r <= 0.5 * size
+        0.5 * size
     }
 
     /// After the last stage: estimate the edge's blur on the measured
@@ -282,8 +308,16 @@ impl<'s> Schedule<'s> {
                 };
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelEdge { blur });
+                let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
+                let half_width = pixel_edge_band_for(
+                    blur,
+                    self.sampler.pixel_noise(),
+                    contrast.map(|(_, c)| c),
+                    self.sampler.quantum(),
+                    self.clear_band_limit(),
+                );
                 self.stages.push(Stage {
-                    half_width: pixel_edge_band(blur),
+                    half_width,
                     elements,
                 });
             } else if good && matched > BAND_MISMATCH * r {

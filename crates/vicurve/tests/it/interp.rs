@@ -408,3 +408,48 @@ fn the_quantum_of_integer_levels_is_found() {
         assert_eq!(at(&float), None, "{kind:?}");
     }
 }
+
+/// The pixels' noise is found on an image with an edge: within 5 % of the
+/// rendered noise without quantisation and in 16 bits, within 8 % in 8
+/// bits (1.5 gray levels, with the rounding's own `q^2 / 12`; the trimmed
+/// share falls among whole levels), and 0 on a noiseless image (to the
+/// floating-point rounding of its levels).
+#[test]
+fn the_pixel_noise_is_found_beside_an_edge() {
+    use vicurve::render::{render, RenderSpec};
+    use vicurve::truth::Shape;
+    let noise_of = |noise: f64, bits: Option<u8>| {
+        let spec = RenderSpec {
+            width: 256,
+            height: 256,
+            shape: Shape::Circle {
+                cx: 128.3,
+                cy: 127.6,
+                r: 80.0,
+            },
+            blur_sigma: 1.0,
+            noise,
+            seed: 3,
+            bits,
+            ..RenderSpec::default()
+        };
+        let img = render(&spec).unwrap();
+        Sampler::new(&img, Interpolation::CubicBSpline).pixel_noise()
+    };
+    // Contrast 0.6 (the default 0.8 on 0.2).
+    for (noise, bits, tolerance) in [
+        (0.02, None, 0.05),
+        (0.01, Some(16), 0.05),
+        (0.01, Some(8), 0.08),
+    ] {
+        let found = noise_of(noise, bits);
+        let q = bits.map_or(0.0, |b| 1.0 / ((1u32 << b) - 1) as f64);
+        let expected = ((0.6 * noise).powi(2) + q * q / 12.0).sqrt();
+        assert!(
+            (found / expected - 1.0).abs() < tolerance,
+            "{noise} {bits:?}: {found:e} for {expected:e}"
+        );
+    }
+    assert!(noise_of(0.0, None) < 1e-9);
+    assert!(noise_of(0.0, Some(8)) < 1e-9);
+}

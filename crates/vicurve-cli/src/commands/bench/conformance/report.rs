@@ -3,7 +3,8 @@
 
 use super::cases::{ShapeName, BLURS, LINE_WIDTH, NOISES, PAPER_STAGES, SIZE};
 use super::score::{
-    Row, BIAS_EASY, BIAS_HARD, BORDER_GAP, CLOSED_COVERAGE, MAX_OVER_SCATTER, SIGMA_RATIO,
+    Row, BIAS_EASY, BIAS_HARD, BIAS_NOISE_SDS, BORDER_GAP, CLOSED_COVERAGE, MAX_OVER_SCATTER,
+    SIGMA_RATIO,
 };
 use std::fmt::Write as _;
 
@@ -101,7 +102,11 @@ fn conventions(s: &mut String) {
          wall clock of the start search and the fit (images run in parallel on the \
          machine's cores, so times include contention).\n\
          - **Criteria** (one CSV column each): `bias_ok` |bias| <= {BIAS_EASY:.0e} px for blur \
-         <= 2 px and noise <= 2 %, <= {BIAS_HARD:.0e} px elsewhere; `max_ok` max <= \
+         <= 2 px and noise <= 2 %, <= {BIAS_HARD:.0e} px elsewhere, plus {BIAS_NOISE_SDS} x \
+         `bias_noise`, the Cramér–Rao bound on the standard deviation that the image's noise \
+         and rounding leave to the mean position of the whole curve, whatever the method \
+         (one image cannot tell a smaller bias from its noise; the noiseless images of the \
+         same shapes test the bias itself, to within the rounding's share); `max_ok` max <= \
          {MAX_OVER_SCATTER} x scatter; `sigma_ok` scatter / sigma in [{}, {}]; `converged_ok` \
          outcome converged (a refusal is outcome `error`); `covered_ok` closed coverage >= \
          {CLOSED_COVERAGE}, open border gap <= {BORDER_GAP} px. `pass` = all of them.\n",
