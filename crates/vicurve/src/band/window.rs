@@ -63,7 +63,9 @@ impl Band {
         let p = self.degree;
         let h = self.half_width;
         let (r, first, values, full) = (&self.r, &self.first, &self.basis, &self.full_weight);
-        let (sum, inside) = self
+        // Per chunk in parallel, added in the chunks' order: the same bits
+        // however rayon splits the work.
+        let parts: Vec<(f64, usize)> = self
             .weight
             .par_chunks_mut(RECENTRE_CHUNK)
             .enumerate()
@@ -83,7 +85,8 @@ impl Band {
                 }
                 (sum, inside)
             })
-            .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            .collect();
+        let (sum, inside) = parts.iter().fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         self.inside = inside;
         sum
     }

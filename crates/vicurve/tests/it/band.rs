@@ -172,3 +172,44 @@ fn a_windowed_band_counts_the_pixels_around_the_displaced_curve() {
         assert!(matches!(err, Err(Error::InvalidParameter { .. })), "{bad}");
     }
 }
+
+/// A windowed band's weight sum has the same bits however many threads
+/// share the work (a band of several of the window's chunks).
+#[test]
+fn a_windowed_band_sums_alike_on_any_number_of_threads() {
+    use vicurve::fit::Coords;
+    let curve = InitialCurve::Circle {
+        cx: 1600.4,
+        cy: 1599.7,
+        r: 1500.0,
+    }
+    .to_curve()
+    .unwrap();
+    let basis = Basis::new(3, 200, curve.param_length(), true).unwrap();
+    let mut band = Band::build_windowed(
+        &curve,
+        &basis,
+        6.0,
+        1.0,
+        Kind::Silhouette,
+        3200,
+        3200,
+        Coords::Exact,
+    )
+    .unwrap();
+    assert!(band.len() > 20 * 4096, "{} pixels", band.len());
+    let lambda: Vec<f64> = (0..basis.n_functions())
+        .map(|k| 0.4 * (k as f64 * 0.7).sin())
+        .collect();
+    let sums: Vec<u64> = [1, 2, 3, 4, 5, 7, 8]
+        .into_iter()
+        .map(|threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| band.recentre(&basis, &lambda)).to_bits()
+        })
+        .collect();
+    assert!(sums.iter().all(|s| *s == sums[0]), "{sums:?}");
+}
