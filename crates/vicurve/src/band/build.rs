@@ -7,6 +7,7 @@ use super::{Band, BandScratch, Coords, MIN_JACOBIAN};
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::spline::{Basis, MAX_DEGREE};
+use crate::virtual_image::corner::CornerWedge;
 use crate::virtual_image::Profile;
 
 /// What band to build: its size, profile, image, the pixels it keeps and
@@ -111,6 +112,28 @@ pub(super) struct Candidate {
     gamma: f64,
     dgamma: f64,
     weight: f64,
+    /// The corners' wedges that reach the pixel (at most [`MAX_WEDGES`]).
+    wedges: [Option<CornerWedge>; MAX_WEDGES],
+    /// Their terms, summed.
+    corner: f64,
+}
+
+/// Corners whose wedges a pixel takes at most: two, those at the ends of
+/// its side; a third reaches it only on a side shorter than a few blur
+/// widths, which no measurement resolves.
+const MAX_WEDGES: usize = 2;
+
+impl Candidate {
+    /// Take the corners' `wedges` that reach the pixel into its profile,
+    /// evaluated under the spread `spread` (px).
+    pub(super) fn add_wedges(&mut self, wedges: impl Iterator<Item = CornerWedge>, spread: f64) {
+        for (slot, w) in self.wedges.iter_mut().zip(wedges) {
+            let term = w.term(spread);
+            *slot = Some(w);
+            self.corner += term;
+            self.gamma += term;
+        }
+    }
 }
 
 impl Pixels<'_> {
@@ -152,6 +175,8 @@ impl Pixels<'_> {
             gamma,
             dgamma,
             weight: self.thin_weight() / jacobian,
+            wedges: [None; MAX_WEDGES],
+            corner: 0.0,
         }
     }
 }
@@ -227,8 +252,20 @@ impl Band {
             weight: Vec::with_capacity(total),
             full_weight: Vec::with_capacity(total),
             curvature: Vec::with_capacity(total),
+            corner: Vec::new(),
+            corner_wedges: Vec::new(),
         };
-        for c in rows.into_iter().flatten() {
+        for (i, c) in rows.into_iter().flatten().enumerate() {
+            if c.wedges[0].is_some() {
+                if band.corner.is_empty() {
+                    band.corner.resize(i, 0.0);
+                }
+                band.corner_wedges
+                    .extend(c.wedges.iter().flatten().map(|w| (i as u32, *w)));
+            }
+            if !band.corner.is_empty() {
+                band.corner.push(c.corner);
+            }
             band.pos.push(c.foot.pos);
             band.normal.push(c.foot.normal);
             band.s.push(c.foot.s);

@@ -56,11 +56,17 @@ impl Pixels<'_> {
             Profile::Paper { .. } => 0.0,
         };
         let clearances = self.curve.corner_clearances(blur);
+        // The pixel-edge profile's spread, for the corners' wedge terms.
+        let spread = match self.profile {
+            Profile::PixelEdge { blur } => Some((blur * blur + 1.0 / 12.0).sqrt()),
+            _ => None,
+        };
         let cell = CellSearch {
             grid,
             nearest,
             cutoff2,
             clearances: &clearances,
+            spread,
         };
         touched
             .par_chunks(TOUCHED_CHUNK)
@@ -112,18 +118,29 @@ impl Pixels<'_> {
             normal: pr.normal,
             curvature: pr.curvature,
         };
-        Some(self.candidate(foot, jacobian))
+        let mut candidate = self.candidate(foot, jacobian);
+        if let Some(spread) = cell.spread {
+            let wedges = cell
+                .clearances
+                .iter()
+                .filter_map(|c| c.wedge([x, y], pr.u, length, closed, spread));
+            candidate.add_wedges(wedges, spread);
+        }
+        Some(candidate)
     }
 }
 
 /// What [`Pixels::project_cell`] reads: the grid, its packed closest
-/// chords, the squared cutoff distance (px^2) and the corners' clearances
-/// ([`crate::curve::SplineCurve::corner_clearances`]).
+/// chords, the squared cutoff distance (px^2), the corners' clearances
+/// ([`crate::curve::SplineCurve::corner_clearances`]) and, for the
+/// pixel-edge profile, its spread (`sqrt(blur^2 + 1/12)`, px), with which
+/// the corners' wedges enter the profile.
 struct CellSearch<'a> {
     grid: &'a GridShape,
     nearest: &'a [u64],
     cutoff2: f64,
     clearances: &'a [Clearance],
+    spread: Option<f64>,
 }
 
 /// Sort distinct cell indices ascending (LSD radix, 11 bits a pass; the

@@ -146,6 +146,12 @@ pub struct Band {
     pub(crate) full_weight: Vec<f64>,
     /// Signed curvature of the curve at the pixel's closest point, 1/px.
     pub(crate) curvature: Vec<f64>,
+    /// The corners' wedge terms in `gamma` (pixel-edge profile, see
+    /// [`crate::virtual_image::corner`]); empty when no pixel has one.
+    corner: Vec<f64>,
+    /// The wedges behind them, by pixel index, to evaluate them under
+    /// another blur ([`Band::corner_terms`]).
+    corner_wedges: Vec<(u32, crate::virtual_image::corner::CornerWedge)>,
 }
 
 impl Band {
@@ -301,12 +307,41 @@ impl Band {
         if u == 0.0 && self.reference_curvature.is_empty() {
             return (self.gamma[i], self.dgamma[i]);
         }
-        self.profile.eval(
+        let (gamma, dgamma) = self.profile.eval(
             self.r[i] - u,
             self.half_width,
             self.normal[i],
             self.curvature[i],
-        )
+        );
+        (gamma + self.corner_at(i), dgamma)
+    }
+
+    /// The corners' wedge term in pixel `i`'s profile (0 for most pixels;
+    /// see [`crate::virtual_image::corner`]). It stays that of the
+    /// reference while the curve is displaced: a stage re-references until
+    /// the displacement is negligible.
+    #[inline]
+    pub(crate) fn corner_at(&self, i: usize) -> f64 {
+        if self.corner.is_empty() {
+            0.0
+        } else {
+            self.corner[i]
+        }
+    }
+
+    /// Every pixel's wedge term under the pixel-edge profile of blur `blur`
+    /// (px) instead of the band's, or `None` when no pixel has one (for
+    /// comparing blurs at a fixed curve; allocates).
+    pub(crate) fn corner_terms(&self, blur: f64) -> Option<Vec<f64>> {
+        if self.corner_wedges.is_empty() {
+            return None;
+        }
+        let spread = (blur * blur + 1.0 / 12.0).sqrt();
+        let mut terms = vec![0.0; self.len()];
+        for (i, w) in &self.corner_wedges {
+            terms[*i as usize] += w.term(spread);
+        }
+        Some(terms)
     }
 
     /// `U` at pixel `i` for the displacement `lambda` (coefficients in

@@ -681,11 +681,16 @@ impl Correlation {
         let values = self.pushed.as_deref()?;
         let band = &self.band;
         let half_width = band.half_width();
+        let corner = match profile {
+            Profile::PixelEdge { blur } => band.corner_terms(blur),
+            Profile::Paper { .. } => None,
+        };
         let gamma_at = |i: usize| {
             let u = self.displacement_at(i, lambda);
             profile
                 .eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i])
                 .0
+                + corner.as_ref().map_or(0.0, |c| c[i])
         };
         let stride = stride.max(1);
         let count = values.len().div_ceil(stride);

@@ -27,24 +27,44 @@
 //!   side sees the difference between the one-edge image it is modelled
 //!   by and the corner's: the region between the other side and this
 //!   side's extension beyond the vertex (the wedge between the rays from
-//!   the vertex along the two sides' tangents, forward for a pixel before
-//!   the corner and backward for one after it, for convex and concave
-//!   corners alike). [`SplineCurve::corner_clearances`] gives each
-//!   corner's [`Clearance`], and the band leaves out the pixels within
-//!   `CORNER_CLEARANCE + BLUR_CLEARANCE * blur` of that wedge; the sides
-//!   are then measured from the pixels beyond, and meet at the corner.
+//!   the vertex along the two sides' directions, forward for a pixel
+//!   before the corner and backward for one after it, for convex and
+//!   concave corners alike). [`SplineCurve::corner_clearances`] gives each
+//!   corner's [`Clearance`]. The pixel-edge profile adds the blurred
+//!   wedge to the pixel's one-edge image ([`Clearance::wedge`],
+//!   [`crate::virtual_image::corner`]), so that the sides are measured
+//!   from their own pixels up to the vertex; the band leaves out only the
+//!   pixels within `CORNER_CLEARANCE` of the wedge, whose square the
+//!   term's Gaussian stands for poorly. The wedge's lines are the sides'
+//!   secants one to two reaches (`CHORD_SPREADS` spreads of the blur and
+//!   the pixel) from the vertex, and its apex where they meet: the last
+//!   pixels of each side, which the terms fit, do not shape the terms.
+//!   (Leaving out the pixels within two blur widths instead, and fitting
+//!   the rest with one edge, put a pentagon's vertices 1.1 to 1.5 px
+//!   inside at a blur of 4 px, and the secants' ends wiggled by up to
+//!   0.8 px on noisy images when the wedges followed the sides' ends.)
 
 /// Distance (px) kept from the region where a corner's image differs from
-/// a side's one-edge model, without blur: a pixel's square reaches
-/// `sqrt(2) / 2` px from its centre, plus a margin. Without a clearance the
-/// two sides' ends are pulled towards each other.
+/// a side's one-edge model: a pixel's square reaches `sqrt(2) / 2` px from
+/// its centre, plus a margin. Without a clearance the two sides' ends are
+/// pulled towards each other (the pixel-edge profile's wedge term models
+/// the blurred wedge, but not a square crossed by both sides).
 pub(crate) const CORNER_CLEARANCE: f64 = 1.0;
-/// Blur widths (the Gaussian's standard deviation) added to
-/// [`CORNER_CLEARANCE`]. At 2 of them the other side's blurred edge still
-/// adds 2.3 % of the contrast; a wider clearance leaves each side's end to
-/// be extrapolated further, through the noise (the choice is measured in
-/// the commit that made it).
-pub(crate) const BLUR_CLEARANCE: f64 = 2.0;
+/// A side's line at a corner passes through its points one and two times
+/// this many spreads (blur and pixel) from the vertex ([`Clearance::into`]):
+/// past the end of the side, whose pixels the wedge term fits, and within
+/// the reach of the blurred wedge, where the line must stand for the side.
+const CHORD_SPREADS: f64 = 3.0;
+/// ... and at most half this share and this share of the side's length.
+const CHORD_SHARE: f64 = 0.4;
+/// Sides whose directions' cross product is under this meet at the
+/// reference's vertex, not where their lines cross (nearly parallel).
+const MIN_TURN_SINE: f64 = 0.05;
+/// Pixels farther than this many spreads (blur and pixel) from the vertex
+/// get no wedge term ([`Clearance::wedge`]): the term is the other side's
+/// tangent line's, which stands for the side only near the vertex, and
+/// beyond it is negligible unless the sides run side by side (a spike).
+pub(crate) const WEDGE_RADIUS: f64 = 2.0 * crate::virtual_image::corner::REACH;
 /// Pixels farther from the vertex than this many clearance distances are
 /// never left out: along a very sharp spike the other side runs beside
 /// this one for its whole length.
@@ -53,13 +73,15 @@ const MAX_CLEARANCE_RATIO: f64 = 8.0;
 /// A corner as the band's pixels must clear it (see the module docs).
 #[derive(Clone, Copy, Debug)]
 pub struct Clearance {
-    /// The vertex, pixels.
+    /// The vertex, pixels: where the sides' lines meet (the curve's own
+    /// corner point when they are nearly parallel or meet far from it).
     pub vertex: [f64; 2],
     /// Its parameter on the curve, pixels.
     pub at: f64,
-    /// Unit tangent of the side that ends at the vertex.
+    /// Unit direction of the side that ends at the vertex (its secant near
+    /// the vertex, see [`CHORD_SPREADS`]; its tangent if that is empty).
     pub into: [f64; 2],
-    /// Unit tangent of the side that starts there.
+    /// Unit direction of the side that starts there, likewise.
     pub out: [f64; 2],
     /// Distance kept from the other side's edge, pixels.
     pub distance: f64,
@@ -74,16 +96,43 @@ impl Clearance {
         if p[0].hypot(p[1]) >= MAX_CLEARANCE_RATIO * self.distance {
             return false;
         }
-        let mut delta = u - self.at;
-        if closed {
-            delta = (delta + 0.5 * length).rem_euclid(length) - 0.5 * length;
-        }
-        let (a, b) = if delta < 0.0 {
+        let (a, b) = if self.before(u, length, closed) {
             (self.into, self.out)
         } else {
             (neg(self.into), neg(self.out))
         };
         distance_to_wedge(p, a, b) < self.distance
+    }
+
+    /// Whether parameter `u` lies before the vertex (on the side that ends
+    /// there), `length` and `closed` being the curve's.
+    fn before(&self, u: f64, length: f64, closed: bool) -> bool {
+        let mut delta = u - self.at;
+        if closed {
+            delta = (delta + 0.5 * length).rem_euclid(length) - 0.5 * length;
+        }
+        delta < 0.0
+    }
+
+    /// What the other side's edge adds to the one-edge image of the pixel
+    /// at `x`, whose closest point is at parameter `u`, under a spread of
+    /// `spread` pixels ([`CornerWedge`]); `None` when it is negligible or
+    /// the pixel lies farther from the vertex than the sides' tangents
+    /// can stand for them ([`WEDGE_RADIUS`] spreads, plus a pixel).
+    pub fn wedge(
+        &self,
+        x: [f64; 2],
+        u: f64,
+        length: f64,
+        closed: bool,
+        spread: f64,
+    ) -> Option<CornerWedge> {
+        let p = [x[0] - self.vertex[0], x[1] - self.vertex[1]];
+        if p[0].hypot(p[1]) > WEDGE_RADIUS * spread + 1.0 {
+            return None;
+        }
+        let on_into = self.before(u, length, closed);
+        CornerWedge::new(x, self.vertex, self.into, self.out, on_into, spread)
     }
 }
 
@@ -123,6 +172,7 @@ fn distance_to_wedge(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 
 use super::project::Projection;
 use super::{frame_from, SplineCurve};
+use crate::virtual_image::corner::CornerWedge;
 
 impl SplineCurve {
     /// Parameters of the corners (knots of multiplicity at least the
@@ -132,23 +182,103 @@ impl SplineCurve {
     }
 
     /// The corners' [`Clearance`]s for an edge seen through a Gaussian blur
-    /// of `blur` px (0: sharp; the reasons are in `curve/corners.rs`).
+    /// of `blur` px (0: sharp), which sets how far from the vertex the
+    /// sides' secants are taken (the reasons are in `curve/corners.rs`).
     pub fn corner_clearances(&self, blur: f64) -> Vec<Clearance> {
-        let distance = CORNER_CLEARANCE + BLUR_CLEARANCE * blur.max(0.0);
+        let distance = CORNER_CLEARANCE;
         let unit = |v: [f64; 2]| {
             let n = v[0].hypot(v[1]).max(1e-300);
             [v[0] / n, v[1] / n]
         };
+        let spread = (blur.max(0.0).powi(2) + 1.0 / 12.0).sqrt();
+        let (l, closed) = (self.param_length(), self.is_closed());
+        let n = self.corners.len();
         self.corners
             .iter()
-            .map(|&c| {
+            .enumerate()
+            .map(|(k, &c)| {
                 let [vertex, right, _] = self.derivatives(c);
                 let left = self.derivatives_left(c)[1];
+                // The sides' directions over the stretch the wedge reaches
+                // (chords of CHORD_SPREADS spreads, at most CHORD_SHARE of
+                // the way to the next corner): an end that bends within it
+                // does not turn the line that stands for the side.
+                let gap = |a: f64, b: f64| {
+                    if closed {
+                        (b - a).rem_euclid(l)
+                    } else {
+                        (b - a).abs()
+                    }
+                };
+                let before = if k > 0 {
+                    gap(self.corners[k - 1], c)
+                } else if closed && n > 1 {
+                    gap(self.corners[n - 1], c)
+                } else if closed {
+                    l
+                } else {
+                    c
+                };
+                let after = if k + 1 < n {
+                    gap(c, self.corners[k + 1])
+                } else if closed && n > 1 {
+                    gap(c, self.corners[0])
+                } else if closed {
+                    l
+                } else {
+                    l - c
+                };
+                // Each side's line through its points one and two reaches
+                // from the vertex (at most CHORD_SHARE of the side), and
+                // the vertex where the lines meet: the ends of the sides,
+                // which the wedge terms fit, do not enter the terms
+                // themselves (through them the noise of one side's end
+                // moved the other's, which answered in opposition).
+                let reach = CHORD_SPREADS * spread;
+                let at_param = |len: f64, sign: f64, share: f64, times: f64| {
+                    let len = (times * reach).min(share * len);
+                    let mut u = c + sign * len;
+                    if closed {
+                        u = u.rem_euclid(l);
+                    }
+                    self.point(u.clamp(0.0, l))
+                };
+                let line = |len: f64, sign: f64| {
+                    let near = at_param(len, sign, 0.5 * CHORD_SHARE, 1.0);
+                    let far = at_param(len, sign, CHORD_SHARE, 2.0);
+                    // Pointing along the curve's direction of travel.
+                    let d = [sign * (far[0] - near[0]), sign * (far[1] - near[1])];
+                    (near, d)
+                };
+                let (p_in, chord_in) = line(before, -1.0);
+                let (p_out, chord_out) = line(after, 1.0);
+                let pick = |chord: [f64; 2], tangent: [f64; 2]| {
+                    if chord[0].hypot(chord[1]) > 1e-6 {
+                        unit(chord)
+                    } else {
+                        unit(tangent)
+                    }
+                };
+                let (into, out) = (pick(chord_in, left), pick(chord_out, right));
+                // p_in + a into = p_out + b out.
+                let det = out[0] * into[1] - into[0] * out[1];
+                let gap = [p_out[0] - p_in[0], p_out[1] - p_in[1]];
+                let meet = if det.abs() > MIN_TURN_SINE {
+                    let a = (out[0] * gap[1] - out[1] * gap[0]) / det;
+                    [p_in[0] + a * into[0], p_in[1] + a * into[1]]
+                } else {
+                    vertex
+                };
+                let vertex = if (meet[0] - vertex[0]).hypot(meet[1] - vertex[1]) < reach {
+                    meet
+                } else {
+                    vertex
+                };
                 Clearance {
                     vertex,
                     at: c,
-                    into: unit(left),
-                    out: unit(right),
+                    into,
+                    out,
                     distance,
                 }
             })

@@ -21,6 +21,7 @@
 //! physical one, which removes the sub-pixel aliasing of a sharp edge and
 //! the curvature shift of a blurred one.
 
+pub mod corner;
 pub mod pixel_edge;
 mod polarity;
 mod psi;
