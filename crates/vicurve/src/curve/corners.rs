@@ -79,7 +79,7 @@ pub struct Clearance {
     /// Its parameter on the curve, pixels.
     pub at: f64,
     /// Unit direction of the side that ends at the vertex (its secant near
-    /// the vertex, see [`CHORD_SPREADS`]; its tangent if that is empty).
+    /// the vertex, see `curve/corners.rs`; its tangent if that is empty).
     pub into: [f64; 2],
     /// Unit direction of the side that starts there, likewise.
     pub out: [f64; 2],
@@ -118,7 +118,8 @@ impl Clearance {
     /// at `x`, whose closest point is at parameter `u`, under a spread of
     /// `spread` pixels ([`CornerWedge`]); `None` when it is negligible or
     /// the pixel lies farther from the vertex than the sides' tangents
-    /// can stand for them ([`WEDGE_RADIUS`] spreads, plus a pixel).
+    /// can stand for them (twice [`crate::virtual_image::corner::REACH`]
+    /// spreads, plus a pixel).
     pub fn wedge(
         &self,
         x: [f64; 2],

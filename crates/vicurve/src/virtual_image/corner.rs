@@ -31,7 +31,7 @@
 use super::pixel_edge::normal_cdf_pdf;
 
 /// Beyond this many spreads from the wedge, a pixel's term is taken as 0.
-pub(crate) const REACH: f64 = 7.0;
+pub const REACH: f64 = 7.0;
 /// `|rho|` above which [`bivariate_normal_cdf`] integrates along `h`
 /// (the angle integral's integrand steepens as `|rho|` nears 1).
 const STEEP_RHO: f64 = 0.925;
