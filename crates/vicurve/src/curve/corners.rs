@@ -171,6 +171,26 @@ fn distance_to_wedge(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     to_ray(a).min(to_ray(b))
 }
 
+/// Where the lines `p + a t` and `q + b s` cross: `(a, b)`, or `None`
+/// when `|t x s|` is at most `min_sine` (nearly parallel).
+pub(crate) fn crossing(
+    p: [f64; 2],
+    t: [f64; 2],
+    q: [f64; 2],
+    s: [f64; 2],
+    min_sine: f64,
+) -> Option<(f64, f64)> {
+    let det = s[0] * t[1] - t[0] * s[1];
+    if det.abs() <= min_sine {
+        return None;
+    }
+    let gap = [q[0] - p[0], q[1] - p[1]];
+    Some((
+        (s[0] * gap[1] - s[1] * gap[0]) / det,
+        (t[0] * gap[1] - t[1] * gap[0]) / det,
+    ))
+}
+
 use super::project::Projection;
 use super::{frame_from, SplineCurve};
 use crate::virtual_image::corner::CornerWedge;
@@ -186,104 +206,91 @@ impl SplineCurve {
     /// of `blur` px (0: sharp), which sets how far from the vertex the
     /// sides' secants are taken (the reasons are in `curve/corners.rs`).
     pub fn corner_clearances(&self, blur: f64) -> Vec<Clearance> {
-        let distance = CORNER_CLEARANCE;
-        let unit = |v: [f64; 2]| {
-            let n = v[0].hypot(v[1]).max(1e-300);
-            [v[0] / n, v[1] / n]
-        };
         let spread = (blur.max(0.0).powi(2) + 1.0 / 12.0).sqrt();
-        let (l, closed) = (self.param_length(), self.is_closed());
-        let n = self.corners.len();
-        self.corners
-            .iter()
-            .enumerate()
-            .map(|(k, &c)| {
+        let reach = CHORD_SPREADS * spread;
+        (0..self.corners.len())
+            .map(|k| {
+                let c = self.corners[k];
                 let [vertex, right, _] = self.derivatives(c);
                 let left = self.derivatives_left(c)[1];
-                // The sides' directions over the stretch the wedge reaches
-                // (chords of CHORD_SPREADS spreads, at most CHORD_SHARE of
-                // the way to the next corner): an end that bends within it
-                // does not turn the line that stands for the side.
-                let gap = |a: f64, b: f64| {
-                    if closed {
-                        (b - a).rem_euclid(l)
-                    } else {
-                        (b - a).abs()
-                    }
-                };
-                let before = if k > 0 {
-                    gap(self.corners[k - 1], c)
-                } else if closed && n > 1 {
-                    gap(self.corners[n - 1], c)
-                } else if closed {
-                    l
-                } else {
-                    c
-                };
-                let after = if k + 1 < n {
-                    gap(c, self.corners[k + 1])
-                } else if closed && n > 1 {
-                    gap(c, self.corners[0])
-                } else if closed {
-                    l
-                } else {
-                    l - c
-                };
                 // Each side's line through its points one and two reaches
-                // from the vertex (at most CHORD_SHARE of the side), and
-                // the vertex where the lines meet: the ends of the sides,
-                // which the wedge terms fit, do not enter the terms
-                // themselves (through them the noise of one side's end
-                // moved the other's, which answered in opposition).
-                let reach = CHORD_SPREADS * spread;
-                let at_param = |len: f64, sign: f64, share: f64, times: f64| {
-                    let len = (times * reach).min(share * len);
-                    let mut u = c + sign * len;
-                    if closed {
-                        u = u.rem_euclid(l);
-                    }
-                    self.point(u.clamp(0.0, l))
-                };
-                let line = |len: f64, sign: f64| {
-                    let near = at_param(len, sign, 0.5 * CHORD_SHARE, 1.0);
-                    let far = at_param(len, sign, CHORD_SHARE, 2.0);
-                    // Pointing along the curve's direction of travel.
-                    let d = [sign * (far[0] - near[0]), sign * (far[1] - near[1])];
-                    (near, d)
-                };
-                let (p_in, chord_in) = line(before, -1.0);
-                let (p_out, chord_out) = line(after, 1.0);
-                let pick = |chord: [f64; 2], tangent: [f64; 2]| {
-                    if chord[0].hypot(chord[1]) > 1e-6 {
-                        unit(chord)
-                    } else {
-                        unit(tangent)
-                    }
-                };
-                let (into, out) = (pick(chord_in, left), pick(chord_out, right));
-                // p_in + a into = p_out + b out.
-                let det = out[0] * into[1] - into[0] * out[1];
-                let gap = [p_out[0] - p_in[0], p_out[1] - p_in[1]];
-                let meet = if det.abs() > MIN_TURN_SINE {
-                    let a = (out[0] * gap[1] - out[1] * gap[0]) / det;
-                    [p_in[0] + a * into[0], p_in[1] + a * into[1]]
-                } else {
-                    vertex
-                };
-                let vertex = if (meet[0] - vertex[0]).hypot(meet[1] - vertex[1]) < reach {
-                    meet
-                } else {
-                    vertex
-                };
+                // from the vertex, and the vertex where the lines meet: the
+                // ends of the sides, which the wedge terms fit, do not
+                // enter the terms themselves (through them the noise of one
+                // side's end moved the other's, which answered in
+                // opposition).
+                let (before, after) = self.sides_at(k);
+                let (p_in, into) = self.side_line(c, before, -1.0, reach, left);
+                let (p_out, out) = self.side_line(c, after, 1.0, reach, right);
+                let vertex = crossing(p_in, into, p_out, out, MIN_TURN_SINE)
+                    .map(|(a, _)| [p_in[0] + a * into[0], p_in[1] + a * into[1]])
+                    .filter(|m| (m[0] - vertex[0]).hypot(m[1] - vertex[1]) < reach)
+                    .unwrap_or(vertex);
                 Clearance {
                     vertex,
                     at: c,
                     into,
                     out,
-                    distance,
+                    distance: CORNER_CLEARANCE,
                 }
             })
             .collect()
+    }
+
+    /// The parameter lengths of the sides before and after corner `k`: to
+    /// the neighbouring corners, or to the ends of an open curve (a closed
+    /// curve's only corner has the whole curve on each side).
+    fn sides_at(&self, k: usize) -> (f64, f64) {
+        let (l, closed, n) = (self.param_length(), self.is_closed(), self.corners.len());
+        let c = self.corners[k];
+        let gap = |a: f64, b: f64| if closed { (b - a).rem_euclid(l) } else { b - a };
+        let before = match (k, closed) {
+            (0, false) => c,
+            (0, true) if n == 1 => l,
+            (0, true) => gap(self.corners[n - 1], c),
+            _ => gap(self.corners[k - 1], c),
+        };
+        let after = match (k + 1 < n, closed) {
+            (true, _) => gap(c, self.corners[k + 1]),
+            (false, false) => l - c,
+            (false, true) if n == 1 => l,
+            (false, true) => gap(c, self.corners[0]),
+        };
+        (before, after)
+    }
+
+    /// The line standing for the side of parameter length `len` that ends
+    /// (`sign` -1) or starts (+1) at the corner at parameter `c`: its point
+    /// `reach` from the vertex and its unit direction, along the curve's
+    /// travel, to its point `2 reach` away (at most half `CHORD_SHARE` and
+    /// `CHORD_SHARE` of the side); the side's `tangent` at the vertex when
+    /// those points coincide.
+    fn side_line(
+        &self,
+        c: f64,
+        len: f64,
+        sign: f64,
+        reach: f64,
+        tangent: [f64; 2],
+    ) -> ([f64; 2], [f64; 2]) {
+        let (l, closed) = (self.param_length(), self.is_closed());
+        let at = |share: f64, times: f64| {
+            let mut u = c + sign * (times * reach).min(share * len);
+            if closed {
+                u = u.rem_euclid(l);
+            }
+            self.point(u.clamp(0.0, l))
+        };
+        let (near, far) = (at(0.5 * CHORD_SHARE, 1.0), at(CHORD_SHARE, 2.0));
+        let d = [sign * (far[0] - near[0]), sign * (far[1] - near[1])];
+        let unit = |v: [f64; 2]| {
+            let n = v[0].hypot(v[1]).max(1e-300);
+            [v[0] / n, v[1] / n]
+        };
+        (
+            near,
+            unit(if d[0].hypot(d[1]) > 1e-6 { d } else { tangent }),
+        )
     }
 
     /// `C(u)`, `C'(u)` and `C''(u)` as the limits from the left (at a knot,

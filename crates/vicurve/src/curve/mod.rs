@@ -19,6 +19,7 @@ mod corners;
 pub mod init;
 mod project;
 
+pub(crate) use corners::crossing;
 pub use corners::Clearance;
 pub use init::InitialCurve;
 

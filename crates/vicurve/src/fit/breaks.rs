@@ -43,7 +43,7 @@
 //! Breaks need the exact closest-point coordinates (`coords = exact`).
 
 use super::reference::{displaced_point, REFERENCE_SAMPLE_STEP};
-use crate::curve::{InitialCurve, SplineCurve};
+use crate::curve::{crossing, InitialCurve, SplineCurve};
 use crate::error::{Error, Result};
 use crate::spline::{Basis, Break, MAX_DEGREE};
 use rayon::prelude::*;
@@ -229,19 +229,13 @@ fn meeting_point(
     };
     let (tl, tr) = (unit(dl), unit(dr));
     let mid = [0.5 * (pl[0] + pr[0]), 0.5 * (pl[1] + pr[1])];
-    // pl + a tl = pr + b tr.
-    let det = tr[0] * tl[1] - tl[0] * tr[1];
-    let gap = [pr[0] - pl[0], pr[1] - pl[1]];
-    let bound = 3.0 * gap[0].hypot(gap[1]) + 1.0;
-    if det.abs() < 1e-3 {
-        return (mid, tl, tr);
+    let bound = 3.0 * (pr[0] - pl[0]).hypot(pr[1] - pl[1]) + 1.0;
+    match crossing(pl, tl, pr, tr, 1e-3) {
+        Some((a, b)) if a.abs() <= bound && b.abs() <= bound => {
+            ([pl[0] + a * tl[0], pl[1] + a * tl[1]], tl, tr)
+        }
+        _ => (mid, tl, tr),
     }
-    let a = (tr[0] * gap[1] - tr[1] * gap[0]) / det;
-    let b = (tl[0] * gap[1] - tl[1] * gap[0]) / det;
-    if a.abs() > bound || b.abs() > bound {
-        return (mid, tl, tr);
-    }
-    ([pl[0] + a * tl[0], pl[1] + a * tl[1]], tl, tr)
 }
 
 /// Points of `x0 + U n` about `step` pixels apart in `reference`'s

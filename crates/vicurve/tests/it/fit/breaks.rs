@@ -14,15 +14,41 @@ use vicurve::render::coverage::polygon_coverage;
 /// `blurred_square_keeps_its_corners`.
 const BLURRED_MAX_ERROR: f64 = 0.01;
 
-/// Square of half-diagonal `r` about `(cx, cy)`, turned by `phase`,
-/// counterclockwise on screen.
-fn square(cx: f64, cy: f64, r: f64, phase: f64) -> Vec<[f64; 2]> {
-    (0..4)
+/// Regular polygon of `n` vertices at radius `r` about `(cx, cy)`, turned
+/// by `phase`, counterclockwise on screen.
+fn regular(n: usize, cx: f64, cy: f64, r: f64, phase: f64) -> Vec<[f64; 2]> {
+    (0..n)
         .map(|k| {
-            let t = phase + std::f64::consts::FRAC_PI_2 * k as f64;
+            let t = phase + 2.0 * std::f64::consts::PI * k as f64 / n as f64;
             [cx + r * t.cos(), cy - r * t.sin()]
         })
         .collect()
+}
+
+/// Square of half-diagonal `r` about `(cx, cy)`, turned by `phase`,
+/// counterclockwise on screen.
+fn square(cx: f64, cy: f64, r: f64, phase: f64) -> Vec<[f64; 2]> {
+    regular(4, cx, cy, r, phase)
+}
+
+/// The output points of `image` measured from the closed polyline `start`
+/// (a regular polygon) with a break at each of its vertices, checked to
+/// converge with that many corners.
+fn measured_with_breaks_at(image: &Image, start: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let n = start.len();
+    let side = (start[1][0] - start[0][0]).hypot(start[1][1] - start[0][1]);
+    let init = InitialCurve::Polyline {
+        points: start,
+        closed: true,
+    };
+    let config = FitConfig {
+        breaks: (0..n).map(|k| k as f64 * side).collect(),
+        ..FitConfig::default()
+    };
+    let m = measure(image, &init, &config).expect("measure with breaks");
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert_eq!(m.curve.corners().len(), n);
+    m.samples.iter().map(|s| [s.x, s.y]).collect()
 }
 
 /// Exact distance from `p` to the closed polygon `v`.
@@ -137,20 +163,7 @@ fn square_with_breaks_at_its_corners() {
 fn blurred_square_keeps_its_corners() {
     let truth = square(100.3, 99.6, 60.0, 0.3);
     let image = vicurve::render::blur::gaussian_blur(&image_of(&truth, 200), 1.5).unwrap();
-    let start = square(101.5, 98.8, 56.0, 0.27);
-    let side = (start[1][0] - start[0][0]).hypot(start[1][1] - start[0][1]);
-    let init = InitialCurve::Polyline {
-        points: start,
-        closed: true,
-    };
-    let config = FitConfig {
-        breaks: (0..4).map(|k| k as f64 * side).collect(),
-        ..FitConfig::default()
-    };
-    let m = measure(&image, &init, &config).expect("measure with breaks");
-    assert_eq!(m.outcome, Outcome::Converged);
-    assert_eq!(m.curve.corners().len(), 4);
-    let pts: Vec<[f64; 2]> = m.samples.iter().map(|s| [s.x, s.y]).collect();
+    let pts = measured_with_breaks_at(&image, square(101.5, 98.8, 56.0, 0.27));
     let (all, corner) = errors(&truth, &pts);
     println!("blur 1.5 px: max error {all:.2e} px, near the corners {corner:.2e} px");
     assert!(all <= BLURRED_MAX_ERROR, "max error {all} px");
@@ -163,35 +176,14 @@ const PENTAGON_MAX_ERROR: f64 = 0.01;
 /// At a blur of 4 px the other side's edge reaches pixels 10 px from a
 /// vertex: the pixel-edge profile adds that side's blurred wedge to each
 /// pixel near a corner (`virtual_image::corner`), and the pentagon's
-/// corners, 108 degrees, are measured to a few hundredths of a pixel.
+/// corners, 108 degrees, are measured to under a hundredth of a pixel.
 /// (Leaving those pixels out and extrapolating the sides put the vertices
 /// 1.1 to 1.5 px inside.)
 #[test]
 fn a_pentagon_blurred_by_4_px_keeps_its_corners() {
-    let pentagon = |cx: f64, cy: f64, r: f64, phase: f64| -> Vec<[f64; 2]> {
-        (0..5)
-            .map(|k| {
-                let t = phase + 2.0 * std::f64::consts::PI * k as f64 / 5.0;
-                [cx + r * t.cos(), cy - r * t.sin()]
-            })
-            .collect()
-    };
-    let truth = pentagon(120.4, 119.7, 80.0, 0.4);
+    let truth = regular(5, 120.4, 119.7, 80.0, 0.4);
     let image = vicurve::render::blur::gaussian_blur(&image_of(&truth, 240), 4.0).unwrap();
-    let start = pentagon(121.6, 118.9, 78.5, 0.41);
-    let side = (start[1][0] - start[0][0]).hypot(start[1][1] - start[0][1]);
-    let init = InitialCurve::Polyline {
-        points: start,
-        closed: true,
-    };
-    let config = FitConfig {
-        breaks: (0..5).map(|k| k as f64 * side).collect(),
-        ..FitConfig::default()
-    };
-    let m = measure(&image, &init, &config).expect("measure with breaks");
-    assert_eq!(m.outcome, Outcome::Converged);
-    assert_eq!(m.curve.corners().len(), 5);
-    let pts: Vec<[f64; 2]> = m.samples.iter().map(|s| [s.x, s.y]).collect();
+    let pts = measured_with_breaks_at(&image, regular(5, 121.6, 118.9, 78.5, 0.41));
     let (all, corner) = errors(&truth, &pts);
     println!("pentagon, blur 4 px: max error {all:.2e} px, near the corners {corner:.2e} px");
     assert!(all <= PENTAGON_MAX_ERROR, "max error {all} px");
