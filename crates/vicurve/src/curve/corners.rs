@@ -41,8 +41,9 @@
 //!   pixels of each side, which the terms fit, do not shape the terms.
 //!   (Leaving out the pixels within two blur widths instead, and fitting
 //!   the rest with one edge, put a pentagon's vertices 1.1 to 1.5 px
-//!   inside at a blur of 4 px, and the secants' ends wiggled by up to
-//!   0.8 px on noisy images when the wedges followed the sides' ends.)
+//!   inside at a blur of 4 px; with the wedges' lines drawn from the
+//!   curve's own vertex, the sides' ends wiggled by up to 0.8 px at 2 %
+//!   noise.)
 
 /// Distance (px) kept from the region where a corner's image differs from
 /// a side's one-edge model: a pixel's square reaches `sqrt(2) / 2` px from
