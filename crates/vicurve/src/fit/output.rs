@@ -6,6 +6,7 @@ use super::blur::{settle_noise_gain, shortest_element};
 use super::breaks;
 use super::misfit::{oscillation, oscillation_at, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
+use super::refine::displacement;
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
@@ -104,8 +105,7 @@ impl Final {
             f64::INFINITY
         };
         let kept = output_points(&s, spacing, closing);
-        let normals: Vec<[f64; 2]> = s.par_iter().map(|&si| curve.frame(si).normal).collect();
-        let terms = SigmaTerms::new(self, sampler, (&pts, &normals, &s), blur);
+        let terms = SigmaTerms::new(self, sampler, (&params, &s), blur);
         let samples: Vec<Sample> = kept
             .par_iter()
             .map(|&i| {
@@ -159,7 +159,8 @@ impl Final {
 struct SigmaTerms<'a> {
     fin: &'a Final,
     residual: Option<ResidualMisfit>,
-    /// The oscillation at each point of `x0 + U n`, when it is checked.
+    /// The oscillation of `U` at each point of `x0 + U n`, when it is
+    /// checked.
     oscillation: Option<Vec<f64>>,
     /// Points of `x0 + U n` in an element.
     reach: usize,
@@ -170,17 +171,17 @@ struct SigmaTerms<'a> {
 }
 
 impl<'a> SigmaTerms<'a> {
-    /// The terms for the points `pts` of `x0 + U n` of `fin`, with their
-    /// unit normals and arc lengths, and the edge's spread `blur` (pixels,
-    /// when its curvature shift was removed).
+    /// The terms for the points of `x0 + U n` of `fin` at reference
+    /// parameters `params` and arc lengths `s`, and the edge's spread
+    /// `blur` (pixels, when its curvature shift was removed).
     fn new(
         fin: &'a Final,
         sampler: &Sampler,
-        (pts, normals, s): (&[[f64; 2]], &[[f64; 2]], &[f64]),
+        (params, s): (&[f64], &[f64]),
         blur: Option<f64>,
     ) -> Self {
         let closed = fin.reference.is_closed();
-        let step = s.last().copied().unwrap_or(0.0) / (pts.len().max(2) - 1) as f64;
+        let step = s.last().copied().unwrap_or(0.0) / (params.len().max(2) - 1) as f64;
         let span = fin.corr.basis().element_length();
         // Elements shorter than the blur resolves (`shortest_element`;
         // given ones can be) may describe an oscillation the image no
@@ -192,9 +193,14 @@ impl<'a> SigmaTerms<'a> {
                 blur.map(|b| std::f64::consts::PI * b * std::f64::consts::FRAC_1_SQRT_2)
             }
         };
-        let oscillation = shortest
-            .filter(|&r| span < r)
-            .map(|_| oscillation(pts, normals, step, span, closed));
+        let oscillation = shortest.filter(|&r| span < r).map(|_| {
+            let basis = fin.corr.basis();
+            let u: Vec<f64> = params
+                .iter()
+                .map(|&p| displacement(basis, &fin.lambda, p))
+                .collect();
+            oscillation(&u, step, span, closed)
+        });
         // A pixel-edge stage's settles amplify the noise of one fit.
         let gain = match fin.profile {
             Profile::PixelEdge { blur } => settle_noise_gain(blur, span),
