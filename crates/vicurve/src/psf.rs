@@ -310,15 +310,15 @@ fn band_data(
     if band.len() < 50 {
         return None;
     }
-    // Pixel centres sit on the sampling grid: the interpolant returns the
-    // pixel values themselves there.
+    // The band's pixels are pixel centres in the image: their recorded
+    // values (what the interpolant returns there).
     let stride = band.len().div_ceil(max).max(1);
     let mut data: Vec<(f64, f64)> = band
         .positions()
         .iter()
         .zip(band.r())
         .step_by(stride)
-        .filter_map(|(p, &r)| sampler.value(p[0], p[1]).map(|f| (r, f)))
+        .filter_map(|(p, &r)| sampler.pixel(p[0] as usize, p[1] as usize).map(|f| (r, f)))
         .collect();
     data.sort_by(|a, b| a.0.total_cmp(&b.0));
     Some(data)
