@@ -7,6 +7,7 @@ use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::psf;
+use crate::virtual_image::pixel_edge::MIN_BLUR;
 use crate::virtual_image::{Kind, Profile};
 
 /// Half-width of the first band on which the edge's blur is estimated,
@@ -31,6 +32,11 @@ pub(super) const MAX_BLUR_UPDATES: usize = 3;
 /// A fitted blur that differs from the one in use by more than this (pixels)
 /// is worth another run.
 pub(crate) const BLUR_TOLERANCE: f64 = 0.01;
+/// Spacing of the three blurs of [`parabolic_refit`], pixels: near its
+/// minimum the residual is smooth, and the vertex of a parabola this narrow
+/// is the minimum to far better than `BLUR_TOLERANCE` when it lies within
+/// a probe of the middle (tested in `fit/track.rs`).
+const BLUR_PROBE: f64 = 0.02;
 /// The pixel-edge stage's band covers the pixel's largest extent along a
 /// normal (`sqrt(2) / 2` px), this many blur deviations and
 /// `PIXEL_EDGE_PLATEAU` px of the flat levels on each side, and is at least
@@ -141,28 +147,79 @@ pub(super) fn matched_band(e: &psf::EdgeSpread) -> f64 {
 }
 
 /// The optical blur (pixels) of the pixel-edge profile that best fits the
-/// band of `corr` at `lambda` (least squares, gray levels refitted; golden
-/// section within 30 % + 0.15 px of `current`, on at most `BLUR_FIT_PIXELS`
-/// band pixels; when the optimum is at the bracket's end, the caller's next
-/// run brackets again around it). The position hardly depends on the blur
-/// along a straight edge (the profile is symmetric), but a mismatched width
-/// makes the fit depend on the edge's sub-pixel phase.
+/// band of `corr` at `lambda` (least squares, gray levels refitted, on at
+/// most `BLUR_FIT_PIXELS` band pixels). The position hardly depends on the
+/// blur along a straight edge (the profile is symmetric), but a mismatched
+/// width makes the fit depend on the edge's sub-pixel phase.
+///
+/// Each evaluation is a pass over the band, and a stage refits its blur
+/// after every run, where it mostly confirms the blur in use or the one
+/// the previous refit found: so first the vertex of the parabola through
+/// the residual at `current` and `current +- BLUR_PROBE`, when it lies
+/// within a probe ([`parabolic_refit`], 3 evaluations); else a
+/// golden-section search within 30 % + 0.15 px of `current` (14 more).
+/// When the optimum is at that bracket's end, the caller's next run
+/// brackets again around it.
 pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
-    let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
-    let ssr = |blur: f64| {
-        corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
-            .unwrap_or(f64::INFINITY)
-    };
+    if let Some(blur) = parabolic_refit(corr, lambda, current) {
+        return blur;
+    }
+    let ssr = blur_residual(corr, lambda);
     let lo = (0.7 * current - 0.15).max(0.0);
     let hi = 1.3 * current + 0.15;
     // 12 steps: the bracket shrinks to 3e-3 of its width.
-    let best = psf::golden(lo, hi, 12, ssr);
+    let best = psf::golden(lo, hi, 12, &ssr);
     // The bracket's ends are never evaluated: a focused edge's optimum is 0.
     if lo == 0.0 && ssr(0.0) <= ssr(best) {
         0.0
     } else {
         best
     }
+}
+
+/// The band's residual as a function of the pixel edge's blur (pixels),
+/// on at most `BLUR_FIT_PIXELS` of its pixels.
+pub(super) fn blur_residual<'a>(
+    corr: &'a Correlation,
+    lambda: &'a [f64],
+) -> impl Fn(f64) -> f64 + 'a {
+    let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
+    move |blur: f64| {
+        corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
+            .unwrap_or(f64::INFINITY)
+    }
+}
+
+/// The blur (pixels) at the vertex of the parabola through the band's
+/// residual at `current` and `current +- BLUR_PROBE` (`0, BLUR_PROBE, 2
+/// BLUR_PROBE` near 0), as a function of the blur's variance, on which the
+/// profile depends smoothly, also near 0, where the residual is flat in
+/// the blur itself; `None` unless the parabola opens upwards and its
+/// vertex lies within a probe of the middle blur. Below `MIN_BLUR` the
+/// profile no longer depends on the blur, its residual is flat and the
+/// vertex meaningless: `current` stands there.
+pub(super) fn parabolic_refit(corr: &Correlation, lambda: &[f64], current: f64) -> Option<f64> {
+    let mid = current.max(BLUR_PROBE);
+    let blurs = [mid - BLUR_PROBE, mid, mid + BLUR_PROBE];
+    let variance = parabola_vertex(blurs.map(|b| b * b), blurs.map(blur_residual(corr, lambda)))?;
+    // A focused edge: the residual grows from variance 0 on.
+    let blur = variance.max(0.0).sqrt();
+    if blur < MIN_BLUR && current < MIN_BLUR {
+        return Some(current);
+    }
+    ((blur - mid).abs() <= BLUR_PROBE).then_some(blur)
+}
+
+/// The abscissa of the vertex of the parabola through three points of
+/// increasing `x`; `None` unless it opens upwards.
+fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
+    let d01 = (y[1] - y[0]) / (x[1] - x[0]);
+    let d12 = (y[2] - y[1]) / (x[2] - x[1]);
+    let a = (d12 - d01) / (x[2] - x[0]);
+    if !(a > 0.0 && a.is_finite() && d01.is_finite()) {
+        return None;
+    }
+    Some(0.5 * (x[0] + x[1]) - d01 / (2.0 * a))
 }
 
 /// Half-width of the band of the pixel-edge stage for an optical blur of
@@ -274,4 +331,22 @@ pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
         })
         .sum();
     (sum / (3.0 * n as f64)).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parabola_vertex_of_a_parabola() {
+        let f = |x: f64| 3.0 * (x - 0.7).powi(2) + 1.0;
+        for x in [[0.5, 0.6, 0.7], [0.0, 0.01, 0.5], [0.6, 0.9, 2.0]] {
+            let v = parabola_vertex(x, x.map(f)).unwrap();
+            assert!((v - 0.7).abs() < 1e-12, "{x:?}: {v}");
+            // Concave, flat or not finite: no vertex.
+            assert_eq!(parabola_vertex(x, x.map(|x| -f(x))), None);
+            assert_eq!(parabola_vertex(x, [1.0; 3]), None);
+            assert_eq!(parabola_vertex(x, [1.0, f64::NAN, 1.0]), None);
+        }
+    }
 }

@@ -76,7 +76,7 @@ use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::Sampler;
-use blur::{pixel_edge_band, BLUR_FIT_PIXELS, BLUR_TOLERANCE};
+use blur::{pixel_edge_band, BLUR_TOLERANCE};
 use schedule::run_schedule;
 
 /// Measure the curve in `image` starting from `init`.

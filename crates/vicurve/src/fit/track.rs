@@ -45,14 +45,14 @@ mod cache;
 pub(super) use cache::Kept;
 pub use cache::{TrackCache, TrackSnapshot};
 
+use super::blur::{blur_residual, parabolic_refit};
 use super::{measure_from, pixel_edge_band, run_schedule, Elements, FitConfig, Measurement, Stage};
-use super::{LevelModel, Outcome, StageReport, BLUR_FIT_PIXELS, BLUR_TOLERANCE};
+use super::{LevelModel, Outcome, StageReport, BLUR_TOLERANCE};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::{Interpolation, Sampler};
-use crate::virtual_image::pixel_edge::MIN_BLUR;
 use crate::virtual_image::{Kind, Profile};
 use serde::{Deserialize, Serialize};
 
@@ -259,24 +259,16 @@ const BLUR_BRACKET: f64 = 0.05;
 /// its width, and its middle is within half a [`BLUR_TOLERANCE`] of the
 /// optimum.
 const BLUR_STEPS: usize = 5;
-/// Spacing of the three blurs [`refit_blur`] fits a parabola through,
-/// pixels.
-const BLUR_PROBE: f64 = 0.02;
 
-/// The tracked frame's refit of the pixel edge's blur: the band's residual
-/// (with the gray levels refitted) at `current` and `current +-
-/// BLUR_PROBE` (`0, BLUR_PROBE, 2 BLUR_PROBE` near 0), and the vertex of the
-/// parabola through them as a function of the blur's variance (on which
-/// the profile depends smoothly, also near 0, where the residual is flat in
-/// the blur itself). Near its minimum the residual is smooth, so that vertex
-/// is the minimum to far better than `BLUR_TOLERANCE` when it lies within
-/// a probe of the middle blur (the test
-/// `parabolic_refit_matches_the_search`): three evaluations instead of the
-/// full schedule's 14 (`fit_blur`). Otherwise (the blur moved, or the
-/// residual is not convex there) a golden-section search on `current +-
-/// BLUR_BRACKET` (7 evaluations): a blur that moved farther ends at the
-/// bracket's end, more than `BLUR_TOLERANCE` away, and the stage runs again
-/// from there.
+/// The tracked frame's refit of the pixel edge's blur: the vertex of a
+/// narrow parabola through the band's residual (with the gray levels
+/// refitted) around `current` when it lies within its probes, as in the
+/// full schedule ([`parabolic_refit`]; the test
+/// `parabolic_refit_matches_the_search`: three evaluations). Otherwise
+/// (the blur moved, or the residual is not convex there) a golden-section
+/// search on `current +- BLUR_BRACKET` (7 evaluations), narrower than the
+/// full schedule's: a blur that moved farther ends at the bracket's end,
+/// more than `BLUR_TOLERANCE` away, and the stage runs again from there.
 pub(super) fn refit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
     debug_assert!(BLUR_BRACKET * 0.618f64.powi(BLUR_STEPS as i32) < BLUR_TOLERANCE);
     if let Some(blur) = parabolic_refit(corr, lambda, current) {
@@ -294,43 +286,6 @@ pub(super) fn refit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f6
     }
 }
 
-/// The band's residual as a function of the pixel edge's blur (pixels),
-/// on at most `BLUR_FIT_PIXELS` of its pixels.
-fn blur_residual<'a>(corr: &'a Correlation, lambda: &'a [f64]) -> impl Fn(f64) -> f64 + 'a {
-    let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
-    move |blur: f64| {
-        corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
-            .unwrap_or(f64::INFINITY)
-    }
-}
-
-/// The vertex step of [`refit_blur`]; `None` when it does not apply.
-fn parabolic_refit(corr: &Correlation, lambda: &[f64], current: f64) -> Option<f64> {
-    let mid = current.max(BLUR_PROBE);
-    let blurs = [mid - BLUR_PROBE, mid, mid + BLUR_PROBE];
-    let variance = parabola_vertex(blurs.map(|b| b * b), blurs.map(blur_residual(corr, lambda)))?;
-    // A focused edge: the residual grows from variance 0 on.
-    let blur = variance.max(0.0).sqrt();
-    // Below `MIN_BLUR` every blur gives the same profile, the residual is
-    // flat and its vertex meaningless: the blur in use stands.
-    if blur < MIN_BLUR && current < MIN_BLUR {
-        return Some(current);
-    }
-    ((blur - mid).abs() <= BLUR_PROBE).then_some(blur)
-}
-
-/// The abscissa of the vertex of the parabola through three points of
-/// increasing `x`; `None` unless it opens upwards.
-fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
-    let d01 = (y[1] - y[0]) / (x[1] - x[0]);
-    let d12 = (y[2] - y[1]) / (x[2] - x[1]);
-    let a = (d12 - d01) / (x[2] - x[0]);
-    if !(a > 0.0 && a.is_finite() && d01.is_finite()) {
-        return None;
-    }
-    Some(0.5 * (x[0] + x[1]) - d01 / (2.0 * a))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -345,7 +300,9 @@ mod tests {
     /// several blurs, with the global and the varying levels, from blurs in
     /// use 0.015 px either side of the optimum: within a quarter of
     /// `BLUR_TOLERANCE` (measured: 5e-4 px at most), or with as low a
-    /// residual (the focused disc, whose residual is flat below 0.03 px).
+    /// residual (the focused disc, whose residual is flat below 0.03 px);
+    /// and the full schedule's `fit_blur` from 0.3 px either side within
+    /// half of it where its bracket holds the optimum.
     #[test]
     fn parabolic_refit_matches_the_search() {
         for (blur, noise) in [(0.0, 0.0), (0.6, 0.005), (1.2, 0.01), (2.5, 0.0)] {
@@ -390,6 +347,24 @@ mod tests {
                 if ssr(0.0) <= ssr(optimum) {
                     optimum = 0.0;
                 }
+                // The full schedule's refit from farther (its golden
+                // section then): within half a tolerance, or as good, when
+                // its bracket holds the optimum (else the next run
+                // brackets again).
+                for offset in [-0.3, 0.015, 0.3] {
+                    let current = (optimum + offset).max(0.0);
+                    let bracket = (0.7 * current - 0.15).max(0.0)..=1.3 * current + 0.15;
+                    if !bracket.contains(&optimum) {
+                        continue;
+                    }
+                    let fitted = super::super::blur::fit_blur(&corr, &lambda, current);
+                    let half = 0.5 * BLUR_TOLERANCE;
+                    let bound = ssr(optimum + half).max(ssr((optimum - half).max(0.0)));
+                    assert!(
+                        (fitted - optimum).abs() < half || ssr(fitted) <= bound,
+                        "fit_blur: blur {blur}, {levels:?}, from {current}: {fitted} vs {optimum}"
+                    );
+                }
                 for offset in [-0.015, 0.0, 0.015] {
                     let current = (optimum + offset).max(0.0);
                     // The vertex step applies, except to the focused disc
@@ -414,19 +389,6 @@ mod tests {
                     );
                 }
             }
-        }
-    }
-
-    #[test]
-    fn parabola_vertex_of_a_parabola() {
-        let f = |x: f64| 3.0 * (x - 0.7).powi(2) + 1.0;
-        for x in [[0.5, 0.6, 0.7], [0.0, 0.01, 0.5], [0.6, 0.9, 2.0]] {
-            let v = parabola_vertex(x, x.map(f)).unwrap();
-            assert!((v - 0.7).abs() < 1e-12, "{x:?}: {v}");
-            // Concave, flat or not finite: no vertex.
-            assert_eq!(parabola_vertex(x, x.map(|x| -f(x))), None);
-            assert_eq!(parabola_vertex(x, [1.0; 3]), None);
-            assert_eq!(parabola_vertex(x, [1.0, f64::NAN, 1.0]), None);
         }
     }
 }

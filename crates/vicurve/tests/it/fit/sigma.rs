@@ -118,7 +118,11 @@ fn a_blurred_star_outline_is_not_an_oscillation() {
     );
     assert_eq!(m.outcome, Outcome::Converged);
     assert_eq!(summary.flagged, 0, "{summary:?}");
-    assert!((0.7..=1.4).contains(&(scatter / sigma)), "ratio {}", scatter / sigma);
+    assert!(
+        (0.7..=1.4).contains(&(scatter / sigma)),
+        "ratio {}",
+        scatter / sigma
+    );
 }
 
 /// A model that misfits: the 5-lobed star of amplitude 20 % (lobes of
@@ -226,4 +230,3 @@ fn sigma_covers_the_rounding_of_eight_bit_levels() {
         }
     }
 }
-
