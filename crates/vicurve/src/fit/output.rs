@@ -4,15 +4,15 @@
 
 use super::blur::{settle_noise_gain, shortest_element};
 use super::breaks;
-use super::misfit::{oscillation, oscillation_at, ResidualMisfit};
-use super::reference::{chord_lengths, CURVE_SPACING};
+use super::misfit::{oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
+use super::reference::{chord_lengths, displaced_point, CURVE_SPACING};
 use super::refine::displacement;
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::interp::Sampler;
-use crate::virtual_image::Profile;
+use crate::virtual_image::{Kind, Profile};
 use rayon::prelude::*;
 
 /// Largest spacing of the points of `x0 + U n` the output curve is fitted
@@ -112,6 +112,7 @@ impl Final {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
                 let (sigma_noise, misfit) = terms.at(i, params[i]);
+                let misfit = terms.edge_checked(params[i], sigma_noise, misfit);
                 Sample {
                     s: s[i],
                     x: q[0],
@@ -159,6 +160,8 @@ impl Final {
 struct SigmaTerms<'a> {
     fin: &'a Final,
     residual: Option<ResidualMisfit>,
+    /// The level-crossing check of a silhouette's flagged samples.
+    edge: Option<EdgeCheck<'a>>,
     /// The oscillation of `U` at each point of `x0 + U n`, when it is
     /// checked.
     oscillation: Option<Vec<f64>>,
@@ -176,7 +179,7 @@ impl<'a> SigmaTerms<'a> {
     /// `blur` (pixels, when its curvature shift was removed).
     fn new(
         fin: &'a Final,
-        sampler: &Sampler,
+        sampler: &'a Sampler,
         (params, s): (&[f64], &[f64]),
         blur: Option<f64>,
     ) -> Self {
@@ -218,9 +221,18 @@ impl<'a> SigmaTerms<'a> {
             .noise_var()
             .filter(|v| *v > 0.0)
             .map_or(1.0, |v| (sampler.rounding_variance() / v).max(1.0).sqrt());
+        let edge = match fin.profile {
+            Profile::PixelEdge { blur } => Some(Some(blur)),
+            Profile::Paper {
+                kind: Kind::Silhouette,
+            } => Some(None),
+            Profile::Paper { .. } => None,
+        }
+        .and_then(|blur| EdgeCheck::new(sampler, &fin.reference, &fin.corr, fin.half_width, blur));
         SigmaTerms {
             fin,
             residual,
+            edge,
             oscillation,
             reach: ((span / step.max(1e-9)).round() as usize).max(1),
             gain: gain * correlation.sqrt() * rounding,
@@ -238,6 +250,22 @@ impl<'a> SigmaTerms<'a> {
             .as_ref()
             .map_or(0.0, |o| oscillation_at(o, i, self.reach, noise, closed));
         (noise, residual.max(oscillation))
+    }
+
+    /// The misfit term of a sample at reference parameter `u` with the
+    /// terms `noise` and `misfit` of [`Self::at`]: where it is flagged
+    /// (`misfit > noise`), at least the image's edge's distance from it
+    /// ([`EdgeCheck`]), which a linearised request underestimates when it
+    /// is large.
+    fn edge_checked(&self, u: f64, noise: f64, misfit: f64) -> f64 {
+        match &self.edge {
+            Some(edge) if misfit > noise => {
+                let fin = self.fin;
+                let point = displaced_point(&fin.reference, fin.corr.basis(), &fin.lambda, u);
+                misfit.max(edge.at(u, point))
+            }
+            _ => misfit,
+        }
     }
 }
 
