@@ -134,8 +134,8 @@ impl PyMeasurement {
     }
 
     /// Why a diverged fit stopped: "left_image", "no_contrast",
-    /// "non_finite", "degenerate", "self_intersecting" or "folded_back";
-    /// None otherwise.
+    /// "non_finite", "degenerate", "self_intersecting", "folded_back" or
+    /// "lost_edge"; None otherwise.
     #[getter]
     fn divergence(&self) -> Option<&'static str> {
         match self.measurement.outcome {
@@ -146,6 +146,7 @@ impl PyMeasurement {
                 Divergence::Degenerate => "degenerate",
                 Divergence::SelfIntersecting { .. } => "self_intersecting",
                 Divergence::FoldedBack { .. } => "folded_back",
+                Divergence::LostEdge { .. } => "lost_edge",
             }),
             _ => None,
         }

@@ -42,6 +42,15 @@ pub enum Divergence {
         /// y (row), pixels.
         y: f64,
     },
+    /// The curve left the edge near this point: along a stretch of at
+    /// least an element where the residuals flag a misfit, the band holds
+    /// no edge (no crossing of the half level within `R` of the curve).
+    LostEdge {
+        /// x (column), pixels.
+        x: f64,
+        /// y (row), pixels.
+        y: f64,
+    },
 }
 
 impl std::fmt::Display for Divergence {
@@ -64,6 +73,12 @@ impl std::fmt::Display for Divergence {
                 write!(
                     f,
                     "the curve folded back on itself (loops) near ({x:.1}, {y:.1})"
+                )
+            }
+            Divergence::LostEdge { x, y } => {
+                write!(
+                    f,
+                    "the curve left the edge near ({x:.1}, {y:.1}): no edge within the band there"
                 )
             }
         }

@@ -181,15 +181,14 @@ impl<'a> EdgeCheck<'a> {
     /// n(u)` (`displaced`, reference parameter `u`), pixels, where that is
     /// beyond the crossing's noise and `CROSSING_FLOOR`: the offset along
     /// the normal of the half level crossed nearest the point, less the
-    /// profile's own offset of it. The half-width when the band holds no
-    /// crossing (the edge is at least that far); 0 where the offset is
-    /// within the noise or the floor, or the levels have no contrast.
-    pub fn at(&self, u: f64, displaced: [f64; 2]) -> f64 {
-        let Some((a, c)) = self.corr.levels_at(u) else {
-            return 0.0;
-        };
+    /// profile's own offset of it; 0 where the offset is within the noise
+    /// or the floor. `None` where the band holds no edge: no crossing
+    /// within the half-width, or levels without contrast (the varying
+    /// levels of a band on a plateau have none).
+    pub fn at(&self, u: f64, displaced: [f64; 2]) -> Option<f64> {
+        let (a, c) = self.corr.levels_at(u)?;
         if c.abs() <= CROSSING_SIGNIFICANCE * self.noise {
-            return 0.0;
+            return None;
         }
         let f = self.reference.frame(u);
         let half = a + 0.5 * c;
@@ -199,21 +198,19 @@ impl<'a> EdgeCheck<'a> {
                 displaced[1] + t * f.normal[1],
             )
         };
-        let Some(t) = nearest_crossing(self.half_width, half, &value) else {
-            return self.half_width;
-        };
+        let t = nearest_crossing(self.half_width, half, &value)?;
         // The gradient across one pixel at the crossing sets its noise.
         let slope = match (value(t + 0.5), value(t - 0.5)) {
             (Some(p), Some(m)) => (p - m).abs(),
-            _ => return 0.0,
+            _ => return Some(0.0),
         };
         let offset = t - 0.5 * self.variance * f.curvature;
         let significant = (CROSSING_SIGNIFICANCE * self.noise / slope).max(CROSSING_FLOOR);
-        if slope > 0.0 && offset.abs() > significant {
+        Some(if slope > 0.0 && offset.abs() > significant {
             offset.abs()
         } else {
             0.0
-        }
+        })
     }
 }
 

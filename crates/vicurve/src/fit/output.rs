@@ -51,6 +51,9 @@ pub(super) struct Output {
     pub samples: Vec<Sample>,
     /// The gray levels along the curve, when they vary.
     pub levels: Vec<LevelSample>,
+    /// Where the curve left the edge: the middle of the longest stretch of
+    /// samples whose band holds no edge, when it spans an element or more.
+    pub lost_edge: Option<[f64; 2]>,
 }
 
 impl Final {
@@ -106,14 +109,14 @@ impl Final {
         };
         let kept = output_points(&s, spacing, closing);
         let terms = SigmaTerms::new(self, sampler, (&params, &s), blur);
-        let samples: Vec<Sample> = kept
+        let (samples, lost): (Vec<Sample>, Vec<bool>) = kept
             .par_iter()
             .map(|&i| {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
                 let (sigma_noise, misfit) = terms.at(i, params[i]);
-                let misfit = terms.edge_checked(params[i], sigma_noise, misfit);
-                Sample {
+                let (misfit, lost) = terms.edge_checked(params[i], sigma_noise, misfit);
+                let sample = Sample {
                     s: s[i],
                     x: q[0],
                     y: q[1],
@@ -123,14 +126,17 @@ impl Final {
                     sigma_noise,
                     misfit: misfit > sigma_noise,
                     weight: weights.at(params[i]),
-                }
+                };
+                (sample, lost)
             })
-            .collect();
+            .unzip();
+        let lost_edge = lost_stretch(&samples, &lost, closed, self.corr.basis().element_length());
         Ok(Output {
             curve,
             fit_error,
             samples,
             levels,
+            lost_edge,
         })
     }
 
@@ -256,17 +262,69 @@ impl<'a> SigmaTerms<'a> {
     /// terms `noise` and `misfit` of [`Self::at`]: where it is flagged
     /// (`misfit > noise`), at least the image's edge's distance from it
     /// ([`EdgeCheck`]), which a linearised request underestimates when it
-    /// is large.
-    fn edge_checked(&self, u: f64, noise: f64, misfit: f64) -> f64 {
-        match &self.edge {
-            Some(edge) if misfit > noise => {
-                let fin = self.fin;
-                let point = displaced_point(&fin.reference, fin.corr.basis(), &fin.lambda, u);
-                misfit.max(edge.at(u, point))
-            }
-            _ => misfit,
+    /// is large, or the band's half-width where the band holds no edge;
+    /// and whether the band holds none (the curve left the edge there),
+    /// flagged or not: where the band sees only a plateau the residuals
+    /// are the noise's, and nothing is flagged.
+    fn edge_checked(&self, u: f64, noise: f64, misfit: f64) -> (f64, bool) {
+        let Some(edge) = &self.edge else {
+            return (misfit, false);
+        };
+        let fin = self.fin;
+        let point = displaced_point(&fin.reference, fin.corr.basis(), &fin.lambda, u);
+        let offset = edge.at(u, point);
+        let flagged = misfit > noise;
+        match offset {
+            Some(offset) if flagged => (misfit.max(offset), false),
+            Some(_) => (misfit, false),
+            None if flagged => (misfit.max(fin.half_width), true),
+            None => (misfit, true),
         }
     }
+}
+
+/// The middle of the longest run of consecutive `samples` marked `lost`
+/// (wrapping round a closed curve), when its arc length reaches `span`
+/// pixels (an element: a sample or two without an edge in the band are
+/// clutter or a corner, a stretch that long is a curve off the edge).
+fn lost_stretch(samples: &[Sample], lost: &[bool], closed: bool, span: f64) -> Option<[f64; 2]> {
+    let n = samples.len();
+    if n == 0 || !lost.iter().any(|&l| l) {
+        return None;
+    }
+    // Runs start after a sample that is not lost; a closed curve lost all
+    // round is one run from sample 0.
+    let start = if closed {
+        (0..n).find(|&i| !lost[i]).map_or(0, |i| i + 1)
+    } else {
+        0
+    };
+    let length = samples.last().map_or(0.0, |l| l.s);
+    let mut best: Option<(f64, usize, usize)> = None;
+    let mut run: Option<usize> = None;
+    for k in 0..=n {
+        let i = (start + k) % n;
+        let on = k < n && lost[i];
+        match (on, run) {
+            (true, None) => run = Some(k),
+            (false, Some(first)) => {
+                let (a, b) = ((start + first) % n, (start + k - 1) % n);
+                let arc = if b >= a {
+                    samples[b].s - samples[a].s
+                } else {
+                    length - samples[a].s + samples[b].s
+                };
+                if best.is_none_or(|(l, _, _)| arc > l) {
+                    best = Some((arc, first, k - 1));
+                }
+                run = None;
+            }
+            _ => {}
+        }
+    }
+    let (arc, first, last) = best?;
+    let mid = &samples[(start + (first + last) / 2) % n];
+    (arc >= span).then_some([mid.x, mid.y])
 }
 
 /// The indices of the output samples among points at arc lengths `s`

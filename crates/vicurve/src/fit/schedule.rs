@@ -383,6 +383,7 @@ impl<'s> Schedule<'s> {
             fit_error,
             samples,
             levels,
+            lost_edge,
         } = fin.samples(
             self.sampler,
             self.config.sample_spacing,
@@ -390,6 +391,7 @@ impl<'s> Schedule<'s> {
             blur,
         )?;
         self.check_loops(&samples, curve.is_closed());
+        self.check_edge(lost_edge);
         self.check_contrast();
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
@@ -420,6 +422,24 @@ impl<'s> Schedule<'s> {
         let points: Vec<[f64; 2]> = samples.iter().map(|s| [s.x, s.y]).collect();
         if let Some(divergence) = loops::looped(&points, closed) {
             self.outcome = Outcome::Diverged { divergence };
+            if let Some(last) = self.reports.last_mut() {
+                last.outcome = self.outcome;
+            }
+        }
+    }
+
+    /// A result that left the edge along a stretch of an element or more
+    /// (`lost`, where; see `output::lost_stretch`) is diverged: the band
+    /// holds no edge there, so neither the curve nor its `sigma` says where
+    /// the edge is.
+    fn check_edge(&mut self, lost: Option<[f64; 2]>) {
+        if matches!(self.outcome, Outcome::Diverged { .. }) {
+            return;
+        }
+        if let Some([x, y]) = lost {
+            self.outcome = Outcome::Diverged {
+                divergence: Divergence::LostEdge { x, y },
+            };
             if let Some(last) = self.reports.last_mut() {
                 last.outcome = self.outcome;
             }

@@ -142,3 +142,29 @@ fn a_start_that_never_reaches_the_edge_diverges() {
         m.outcome
     );
 }
+
+/// A curve that cannot reach the edge is not a result: a 6-lobed star (r0
+/// = 140, amplitude 30 %, blur 1.5, 1 % noise) from a circle at 85 % of
+/// its radius with R = 20, 10, 5 and 100 px elements, which cannot follow
+/// its lobes: the curve stays up to 32 px off them, farther than its band
+/// reaches, and was reported converged (measured before). It is diverged:
+/// the curve left the edge, and says where.
+#[test]
+fn a_curve_off_the_edge_is_diverged() {
+    let (m, spec) =
+        super::star_with_long_elements((255.8, 255.3), 140.0, 512, (256.8, 254.3), 100.0);
+    let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
+    println!(
+        "a curve off the edge: {} (max error {:.1} px)",
+        m.outcome, s.max_abs
+    );
+    assert!(s.max_abs > 5.0, "the elements should not follow the lobes");
+    let Outcome::Diverged {
+        divergence: Divergence::LostEdge { x, y },
+    } = m.outcome
+    else {
+        panic!("{}", m.outcome);
+    };
+    // Where it left the edge, the curve is more than the band's 5 px off.
+    assert!(spec.shape.signed_distance(x, y).abs() > 5.0);
+}

@@ -36,6 +36,41 @@ fn stages(list: &[(f64, Elements)]) -> Option<Vec<Stage>> {
     )
 }
 
+/// A 6-lobed star of mean radius `r0` and amplitude 30 % centred at `c`
+/// in a `size`-pixel square image (blur 1.5, 1 % noise, 8 bits, seed 7),
+/// measured from the circle of 0.85 `r0` around `start` with the paper's
+/// kind of stages (R = 20, 10, 5) and elements `h` pixels long, too long
+/// for its lobes; with its image's description, for the truth.
+fn star_with_long_elements(
+    c: (f64, f64),
+    r0: f64,
+    size: usize,
+    start: (f64, f64),
+    h: f64,
+) -> (Measurement, RenderSpec) {
+    let shape = Shape::Star {
+        cx: c.0,
+        cy: c.1,
+        r0,
+        amplitude: 0.3,
+        lobes: 6,
+        phase: 0.0,
+    };
+    let spec = crate::common::spec(shape, (size, size), 1.5, 0.01, 7, Some(8));
+    let h = Elements::Length(h);
+    let config = FitConfig {
+        stages: stages(&[(20.0, h), (10.0, h), (5.0, h)]),
+        ..FitConfig::default()
+    };
+    let init = InitialCurve::Circle {
+        cx: start.0,
+        cy: start.1,
+        r: 0.85 * r0,
+    };
+    let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
+    (m, spec)
+}
+
 fn run(spec: &RenderSpec, init: InitialCurve, config: FitConfig) -> (Measurement, ErrorStats) {
     let image = render(spec).expect("render");
     let m = measure(&image, &init, &config).expect("measure");

@@ -181,32 +181,8 @@ fn misfit_is_flagged_and_covered() {
 /// beyond 3 sigma.
 #[test]
 fn a_misfit_of_pixels_is_covered() {
-    let shape = Shape::Star {
-        cx: 511.8,
-        cy: 512.3,
-        r0: 300.0,
-        amplitude: 0.3,
-        lobes: 6,
-        phase: 0.0,
-    };
-    let spec = spec(shape, (1024, 1024), 1.5, 0.01, 7, Some(8));
-    let stages = [20.0, 10.0, 5.0]
-        .iter()
-        .map(|&half_width| Stage {
-            half_width,
-            elements: Elements::Length(40.0),
-        })
-        .collect();
-    let config = FitConfig {
-        stages: Some(stages),
-        ..FitConfig::default()
-    };
-    let init = InitialCurve::Circle {
-        cx: 511.8,
-        cy: 512.3,
-        r: 0.85 * 300.0,
-    };
-    let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
+    let (m, spec) =
+        super::star_with_long_elements((511.8, 512.3), 300.0, 1024, (511.8, 512.3), 40.0);
     let e: Vec<f64> = m
         .samples
         .iter()
