@@ -29,14 +29,17 @@
 //!   under noise alone it is about the position's `sigma`. Beyond
 //!   `OSCILLATION_SIGNIFICANCE` times that, `|.| / 2.13`, the largest
 //!   within a span, is the misfit there.
-
 //!
 //! Both estimate a misfit's size from a linearised request, which falls
 //! short of a large one (a curve whose elements cannot follow a star's
-//! lobes stays pixels off it while its requests say tenths). Where a sample
-//! is flagged, the **level crossing** settles it on silhouettes: the image
-//! is read along the normal across the band, and the half level `a + c / 2`
-//! crossed nearest the curve is where the image puts the edge ([`EdgeCheck`]).
+//! lobes stays pixels off it while its requests say tenths). On
+//! silhouettes the **level crossing** settles it ([`EdgeCheck`]): the image
+//! is read along each sample's normal across the band, and the half level
+//! `a + c / 2` crossed nearest the curve is where the image puts the edge;
+//! at a flagged sample its distance is the misfit at least. A band that
+//! holds no crossing (or whose levels have no contrast) sees no edge: the
+//! curve left it there, which no residual shows, as the band sees only a
+//! plateau.
 
 use crate::correlation::{Correlation, ResidualBin};
 use crate::curve::SplineCurve;
@@ -138,8 +141,8 @@ impl ResidualMisfit {
     }
 }
 
-/// The level-crossing check of a silhouette's flagged samples (module
-/// docs), prepared once for a result.
+/// The level-crossing check of a silhouette's samples (module docs),
+/// prepared once for a result.
 pub(super) struct EdgeCheck<'a> {
     sampler: &'a Sampler,
     reference: &'a SplineCurve,

@@ -166,7 +166,7 @@ impl Final {
 struct SigmaTerms<'a> {
     fin: &'a Final,
     residual: Option<ResidualMisfit>,
-    /// The level-crossing check of a silhouette's flagged samples.
+    /// The level-crossing check of a silhouette's samples.
     edge: Option<EdgeCheck<'a>>,
     /// The oscillation of `U` at each point of `x0 + U n`, when it is
     /// checked.
