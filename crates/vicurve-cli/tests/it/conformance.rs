@@ -13,10 +13,6 @@ use std::collections::HashMap;
 /// land); a new failure is a regression, not an entry.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
-        "disc/blur0/noise0/8bit/bright/circle-1.5px",
-        "scatter/sigma 0.62",
-    ),
-    (
         "star-a0.2/blur4/noise0/8bit/bright/circle-0.85r",
         "scatter/sigma 3.50",
     ),
@@ -37,10 +33,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
         "polygon-breaks/blur4/noise0/16bit/dark/circle-10pct",
         "scatter/sigma 0.48",
-    ),
-    (
-        "sine-edge/blur0/noise0/16bit/dark/auto",
-        "scatter/sigma 0.04",
     ),
     // With a line's blur and width estimated on every band pixel and the
     // width taken in the middle of those the data cannot tell apart, the

@@ -29,10 +29,19 @@
 //! Requests larger than the noise explains (a lag-0 variance over white
 //! noise's) are systematic residuals, the misfit term's too: that
 //! magnitude is divided out, or a noiseless line whose profile does not
-//! quite match would get a `sigma` several times its error. And the factor
-//! never lowers `sigma` (at least 1): requests smaller than white noise's
-//! mean that the Rice noise estimate took systematic residuals for noise,
-//! not that the curve is more precise than it says.
+//! quite match would get a `sigma` several times its error.
+//!
+//! Requests smaller than white noise's mean that the Rice noise estimate
+//! took systematic residuals for noise: a model that misses the image's
+//! profile in the same way at every part of the edge (a sharp 16-bit
+//! edge's aliasing, a line's not quite matching profile) leaves
+//! differences along `r` that do not move the curve. The factor then
+//! lowers `sigma` to what the requests show (their long-run ratio plus
+//! twice its standard error, so white noise's chance dips do not), but
+//! never below the image's own noise ([`crate::interp::Sampler::pixel_noise`]
+//! and the rounding to its gray levels): on a noiseless 16-bit disc sigma
+//! said 7e-4 px for a scatter of 5e-5. The caller keeps the factor at 1
+//! or more on curves with corners (`fit/output.rs`).
 //!
 //! What it cannot see: elements short enough to follow the texture (the
 //! automatic length goes down to 5 px on a textured star) take its effect
@@ -59,18 +68,19 @@ const NULL_SEED: u64 = 0x5eed_c0de;
 /// Elements per chunk whose factors are compared (their median is kept).
 const CHUNK_ELEMENTS: f64 = 4.0;
 
-/// The factor (at least 1) on the noise variance of the positions: the
-/// long-run variance of the residual requests `bins` (bins of the
-/// reference's parameter, `bin` px long, per-pixel noise variance `noise`)
-/// over that of white noise after the fit's projection on `basis` (module
-/// docs), the bins where the misfit term speaks (`misfit`) left out: a
-/// shape the elements cannot follow leaves residuals correlated over the
-/// whole misfit, which are that term's. 1 with fewer than two chunks of
-/// bins or no noise estimate.
+/// The factor on the noise variance of the positions: the long-run
+/// variance of the residual requests `bins` (bins of the reference's
+/// parameter, `bin` px long, per-pixel noise variance `noise`) over that of
+/// white noise after the fit's projection on `basis` (module docs), the
+/// bins where the misfit term speaks (`misfit`) left out: a shape the
+/// elements cannot follow leaves residuals correlated over the whole
+/// misfit, which are that term's. At least `floor` (the image's own noise
+/// variance over `noise`, at most 1). 1 with fewer than two chunks of bins
+/// or no noise estimate.
 pub(super) fn noise_correlation_factor(
     bins: &[ResidualBin],
     misfit: &[bool],
-    noise: f64,
+    (noise, floor): (f64, f64),
     basis: &Basis,
     bin: f64,
 ) -> f64 {
@@ -102,14 +112,15 @@ pub(super) fn noise_correlation_factor(
         .zip(null)
         .filter(|(s, z)| s.lag0 > 0.0 && z.long_run > 0.0 && z.lag0 > 0.0)
         .collect();
-    factor_of(&pairs)
+    factor_of(&pairs, floor.min(1.0))
 }
 
 /// The factor (module docs) from each chunk's variances, observed and white
-/// noise's: the mean ratio of the long-run
-/// ones less twice its standard error, over the magnitude of the requests
-/// when it exceeds white noise's, at least 1.
-fn factor_of(pairs: &[(Variances, Variances)]) -> f64 {
+/// noise's: the mean ratio of the long-run ones less twice its standard
+/// error, over the magnitude of the requests when it exceeds white noise's,
+/// at least 1; or, when that mean plus twice its standard error is under
+/// 1, that, at least `floor`.
+fn factor_of(pairs: &[(Variances, Variances)], floor: f64) -> f64 {
     let m = pairs.len();
     if m < 2 {
         return 1.0;
@@ -118,8 +129,12 @@ fn factor_of(pairs: &[(Variances, Variances)]) -> f64 {
         pairs.iter().map(|p| p.0.lag0).sum::<f64>() / pairs.iter().map(|p| p.1.lag0).sum::<f64>();
     let ratios: Vec<f64> = pairs.iter().map(|(s, z)| s.long_run / z.long_run).collect();
     let mean = ratios.iter().sum::<f64>() / m as f64;
-    let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (m - 1) as f64;
-    ((mean - 2.0 * (var / m as f64).sqrt()) / magnitude.max(1.0)).max(1.0)
+    let error = 2.0
+        * ((ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>()) / ((m - 1) * m) as f64).sqrt();
+    if mean + error < 1.0 {
+        return (mean + error).max(floor);
+    }
+    ((mean - error) / magnitude.max(1.0)).max(1.0)
 }
 
 /// Each chunk's variances of white noise after the
@@ -288,16 +303,35 @@ mod tests {
     }
 
     /// White requests after the fit's projection: a factor of about 1
-    /// (held at 1 from below).
+    /// (held at 1 from below: their chance dips stay within twice the
+    /// standard error), whatever the seed.
     #[test]
     fn white_residuals_leave_sigma_alone() {
         let basis = closed_basis();
         let proj = unit_projection(&basis);
+        for seed in 1..=8 {
+            let mut rng = Rng::new(seed);
+            let mut d: Vec<f64> = (0..800).map(|_| rng.normal()).collect();
+            proj.remove_fit(&mut d);
+            let f = noise_correlation_factor(&bins_of(&d), &[false; 800], (1.0, 0.0), &basis, 1.0);
+            assert!((1.0..1.35).contains(&f), "seed {seed}: {f}");
+        }
+    }
+
+    /// Requests a tenth of white noise's (the noise estimate took
+    /// systematic residuals for noise): the factor falls to about their
+    /// variance ratio, 0.01, but not below the image's own noise.
+    #[test]
+    fn small_requests_lower_sigma_to_the_image_noise() {
+        let basis = closed_basis();
+        let proj = unit_projection(&basis);
         let mut rng = Rng::new(3);
-        let mut d: Vec<f64> = (0..800).map(|_| rng.normal()).collect();
+        let mut d: Vec<f64> = (0..800).map(|_| 0.1 * rng.normal()).collect();
         proj.remove_fit(&mut d);
-        let f = noise_correlation_factor(&bins_of(&d), &[false; 800], 1.0, &basis, 1.0);
-        assert!(f < 1.35, "{f}");
+        let f = noise_correlation_factor(&bins_of(&d), &[false; 800], (1.0, 0.0), &basis, 1.0);
+        assert!((0.008..0.02).contains(&f), "{f}");
+        let f = noise_correlation_factor(&bins_of(&d), &[false; 800], (1.0, 0.05), &basis, 1.0);
+        assert_eq!(f, 0.05);
     }
 
     /// Requests smoothed along the curve (a moving average of 5 white
@@ -313,7 +347,7 @@ mod tests {
             .map(|i| (0..5).map(|k| white[(i + k) % 800]).sum::<f64>() / 5f64.sqrt())
             .collect();
         proj.remove_fit(&mut d);
-        let f = noise_correlation_factor(&bins_of(&d), &[false; 800], 1.0, &basis, 1.0);
+        let f = noise_correlation_factor(&bins_of(&d), &[false; 800], (1.0, 0.0), &basis, 1.0);
         // Bartlett weights over 10 lags keep most of the 5, less twice the
         // standard error of the chunks' mean.
         assert!((2.0..6.0).contains(&f), "{f}");
@@ -325,12 +359,18 @@ mod tests {
         let basis = Basis::new(3, 4, 40.0, true).unwrap();
         let d = vec![1.0; 40];
         assert_eq!(
-            noise_correlation_factor(&bins_of(&d), &[false; 40], 1.0, &basis, 1.0),
+            noise_correlation_factor(&bins_of(&d), &[false; 40], (1.0, 0.0), &basis, 1.0),
             1.0
         );
         let basis = Basis::new(3, 40, 800.0, true).unwrap();
         assert_eq!(
-            noise_correlation_factor(&bins_of(&vec![1.0; 800]), &[false; 800], 0.0, &basis, 1.0),
+            noise_correlation_factor(
+                &bins_of(&vec![1.0; 800]),
+                &[false; 800],
+                (0.0, 0.0),
+                &basis,
+                1.0
+            ),
             1.0
         );
     }

@@ -72,6 +72,9 @@ pub(super) struct ResidualMisfit {
     bins: Vec<ResidualBin>,
     /// Per-pixel noise variance, gray levels squared.
     noise: f64,
+    /// The image's own noise variance (its pixel noise, at least the
+    /// rounding to its gray levels), gray levels squared.
+    image_noise: f64,
     /// Bins on each side of a sample's.
     reach: usize,
     closed: bool,
@@ -91,22 +94,40 @@ impl ResidualMisfit {
             return None;
         }
         let reach = ((0.25 * corr.basis().element_length() / BIN).round() as usize).max(1);
+        let image_noise = sampler
+            .pixel_noise()
+            .powi(2)
+            .max(sampler.rounding_variance());
         Some(ResidualMisfit {
             bins,
             noise,
+            image_noise,
             reach,
             closed: corr.basis().is_closed(),
         })
     }
 
     /// The factor on the noise variance for residuals correlated along
-    /// the curve ([`super::correlated`]), on the displacement's `basis`.
-    /// The bins where the misfit term speaks are left out.
-    pub fn correlation_factor(&self, basis: &crate::spline::Basis) -> f64 {
+    /// the curve ([`super::correlated`]), on the displacement's `basis`;
+    /// with `lower`, also for residuals smaller than the noise estimate
+    /// says, down to the image's own noise (else at least 1). The bins
+    /// where the misfit term speaks are left out.
+    pub fn correlation_factor(&self, basis: &crate::spline::Basis, lower: bool) -> f64 {
         let misfit: Vec<bool> = (0..self.bins.len())
             .map(|k| self.at((k as f64 + 0.5) * BIN) > 0.0)
             .collect();
-        super::correlated::noise_correlation_factor(&self.bins, &misfit, self.noise, basis, BIN)
+        let floor = if lower {
+            self.image_noise / self.noise
+        } else {
+            1.0
+        };
+        super::correlated::noise_correlation_factor(
+            &self.bins,
+            &misfit,
+            (self.noise, floor),
+            basis,
+            BIN,
+        )
     }
 
     /// The misfit's RMS displacement near reference parameter `u`, pixels
