@@ -39,8 +39,7 @@
 //! lowers `sigma` to what the requests show (their long-run ratio plus
 //! twice its standard error, so white noise's chance dips do not), but
 //! never below the image's own noise ([`crate::interp::Sampler::pixel_noise`]
-//! and the rounding to its gray levels): on a noiseless 16-bit disc sigma
-//! said 7e-4 px for a scatter of 5e-5. The caller keeps the factor at 1
+//! and the rounding to its gray levels). The caller keeps the factor at 1
 //! or more on curves with corners (`fit/output.rs`).
 //!
 //! What it cannot see: elements short enough to follow the texture (the

@@ -19,10 +19,9 @@
 //!   of the oscillating curve matches the image. A feedback grows from one
 //!   settle to the next, so it is looked for in the last run's
 //!   displacement `U` (the change from the previous settle), not in the
-//!   curve: a star's own lobes have detail at the elements' scale too (a
-//!   curve check fired on the exact outline of a 6-lobed star, 7e-3 px at
-//!   9 px elements), and a settled curve that repeats itself holds none of
-//!   it in `U`. The second differences of `U` at spans `a`, `2a` and `3a`
+//!   curve: a star's own lobes have detail at the elements' scale too,
+//!   which a check of the curve takes for an oscillation, and a settled
+//!   curve that repeats itself holds none of it in `U`. The second differences of `U` at spans `a`, `2a` and `3a`
 //!   (`a` the element length) combine to `D(a) - 0.4 D(2a) + D(3a) / 15`,
 //!   which cancels the terms in `a^2` and `a^4` of a smooth `U` and is
 //!   `2.13 A` for an oscillation of amplitude `A` and wavelength `2a`;

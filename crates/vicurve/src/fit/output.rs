@@ -219,9 +219,8 @@ impl<'a> SigmaTerms<'a> {
         // Residual requests smaller than the noise estimate says lower the
         // noise term, except on a curve with corners: the corner's wedge
         // model leaves errors at the sides' ends that the requests do not
-        // show, and the larger estimate is all that covers them (16-bit
-        // polygons at blur 2 and 4 fell to 3 to 8 times under their
-        // scatter).
+        // show, and the larger estimate is all that covers them
+        // (docs/benchmarks.md).
         let lower = fin.reference.corners().is_empty();
         let correlation = residual
             .as_ref()
