@@ -428,12 +428,14 @@ impl<'s> Schedule<'s> {
         }
     }
 
-    /// A result that left the edge along a stretch of an element or more
-    /// (`lost`, where; see `output::lost_stretch`) is diverged: the band
-    /// holds no edge there, so neither the curve nor its `sigma` says where
-    /// the edge is.
+    /// A converged result that left the edge along a stretch of an element
+    /// or more (`lost`, where; see `output::lost_stretch`) is diverged: the
+    /// band holds no edge there, so neither the curve nor its `sigma` says
+    /// where the edge is. An iteration limit is left as it is: the check
+    /// reads the half level of the fitted gray levels, which a fit stopped
+    /// early (a single iteration from 10 px off) may not have yet.
     fn check_edge(&mut self, lost: Option<[f64; 2]>) {
-        if matches!(self.outcome, Outcome::Diverged { .. }) {
+        if self.outcome != Outcome::Converged {
             return;
         }
         if let Some([x, y]) = lost {
