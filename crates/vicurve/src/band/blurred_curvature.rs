@@ -25,6 +25,7 @@
 //! there is no table and the profile takes the local curvature.
 
 use crate::curve::SplineCurve;
+use crate::virtual_image::pixel_edge::spread_variance;
 
 /// Spacing of the table's samples along the parameter, pixels.
 const STEP: f64 = 0.25;
@@ -46,7 +47,7 @@ impl BlurredCurvature {
         if !(blur.is_finite() && blur > 0.0) {
             return None;
         }
-        let v = blur * blur + 1.0 / 12.0;
+        let v = spread_variance(blur);
         let sd = (0.5 * v).sqrt();
         let l = curve.param_length();
         let closed = curve.is_closed();
@@ -154,7 +155,7 @@ mod tests {
         let local = swing(&|u| curve.frame(u).curvature);
         let averaged = swing(&|u| table.at(u));
         let k = m / r0;
-        let v = blur * blur + 1.0 / 12.0;
+        let v = spread_variance(blur);
         let expected = (-0.25 * v * k * k).exp();
         let ratio = averaged / local;
         assert!((ratio - expected).abs() < 0.01, "{ratio} vs {expected}");

@@ -7,6 +7,7 @@ use super::build::{Candidate, Foot, Pixels};
 use super::raster::{unpack, Chords, GridShape};
 use super::{BandScratch, MIN_JACOBIAN};
 use crate::curve::Clearance;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
@@ -58,7 +59,7 @@ impl Pixels<'_> {
         let clearances = self.curve.corner_clearances(blur);
         // The pixel-edge profile's spread, for the corners' wedge terms.
         let spread = match self.profile {
-            Profile::PixelEdge { blur } => Some((blur * blur + 1.0 / 12.0).sqrt()),
+            Profile::PixelEdge { blur } => Some(spread_variance(blur).sqrt()),
             _ => None,
         };
         let cell = CellSearch {

@@ -101,6 +101,7 @@ pub use raster::BandScratch;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::spline::Basis;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::Profile;
 
 /// Pixels (and levelset mesh nodes) whose parallel-curve Jacobian
@@ -336,7 +337,7 @@ impl Band {
         if self.corner_wedges.is_empty() {
             return None;
         }
-        let spread = (blur * blur + 1.0 / 12.0).sqrt();
+        let spread = spread_variance(blur).sqrt();
         let mut terms = vec![0.0; self.len()];
         for (i, w) in &self.corner_wedges {
             terms[*i as usize] += w.term(spread);

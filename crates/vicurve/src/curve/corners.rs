@@ -195,6 +195,7 @@ pub(crate) fn crossing(
 use super::project::Projection;
 use super::{frame_from, SplineCurve};
 use crate::virtual_image::corner::CornerWedge;
+use crate::virtual_image::pixel_edge::spread_variance;
 
 impl SplineCurve {
     /// Parameters of the corners (knots of multiplicity at least the
@@ -207,7 +208,7 @@ impl SplineCurve {
     /// of `blur` px (0: sharp), which sets how far from the vertex the
     /// sides' secants are taken (the reasons are in `curve/corners.rs`).
     pub fn corner_clearances(&self, blur: f64) -> Vec<Clearance> {
-        let spread = (blur.max(0.0).powi(2) + 1.0 / 12.0).sqrt();
+        let spread = spread_variance(blur.max(0.0)).sqrt();
         let reach = CHORD_SPREADS * spread;
         (0..self.corners.len())
             .map(|k| {

@@ -7,6 +7,7 @@ use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::psf;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::pixel_edge::MIN_BLUR;
 use crate::virtual_image::{Kind, Profile};
 
@@ -260,7 +261,7 @@ pub(crate) fn pixel_edge_band_for(
     if !noisy {
         return narrow;
     }
-    let spread = (blur * blur + 1.0 / 12.0).sqrt();
+    let spread = spread_variance(blur).sqrt();
     let wide = (NOISY_BAND_SPREADS * spread).min(limit);
     narrow.max((wide * 4.0).ceil() / 4.0)
 }
@@ -283,7 +284,7 @@ pub(crate) fn pixel_edge_band_for(
 /// over the blur (`band/blurred_curvature.rs`), whose gain stays under
 /// `2 / e`; the stage's elements are bounded by [`shortest_element`].
 pub(super) fn resolved_element(blur: f64) -> f64 {
-    std::f64::consts::PI * (blur * blur + 1.0 / 12.0).sqrt()
+    std::f64::consts::PI * spread_variance(blur).sqrt()
 }
 
 /// The shortest elements of a pixel-edge stage under an optical blur of
@@ -310,7 +311,7 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
 /// noise of `U` spreads about evenly over `k` up to `pi / h`: the factor is
 /// the RMS of `1 / (1 - g)` over `k` in `[0, pi / h]`.
 pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
-    let v = blur * blur + 1.0 / 12.0;
+    let v = spread_variance(blur);
     let g = v * std::f64::consts::PI.powi(2) / (2.0 * h * h);
     // Simpson's rule on 16 intervals, over x = k h / pi.
     let f = |x: f64| {

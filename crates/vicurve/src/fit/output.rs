@@ -5,7 +5,7 @@
 use super::blur::{settle_noise_gain, shortest_element};
 use super::breaks;
 use super::misfit::{oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
-use super::reference::{chord_lengths, displaced_point, CURVE_SPACING};
+use super::reference::{chord_lengths, CURVE_SPACING};
 use super::refine::displacement;
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
@@ -277,8 +277,7 @@ impl<'a> SigmaTerms<'a> {
             return (misfit, false);
         };
         let fin = self.fin;
-        let point = displaced_point(&fin.reference, fin.corr.basis(), &fin.lambda, u);
-        let offset = edge.at(u, point);
+        let offset = edge.at(u, displacement(fin.corr.basis(), &fin.lambda, u));
         let flagged = misfit > noise;
         match offset {
             Some(offset) if flagged => (misfit.max(offset), false),

@@ -21,6 +21,7 @@ use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::interp::Sampler;
 use crate::psf;
+use crate::virtual_image::pixel_edge::optical_blur;
 use crate::virtual_image::{Kind, Profile};
 use std::f64::consts::TAU;
 
@@ -297,7 +298,7 @@ impl<'s> Schedule<'s> {
                 // may have stopped on aliasing, which the pixel edge does
                 // not have).
                 // No shorter than the blur resolves (`shortest_element`).
-                let blur = (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt();
+                let blur = optical_blur(e.sigma);
                 let floor = shortest_element(blur);
                 let elements = match stage.elements {
                     Elements::Auto { shortest, .. } => Elements::Auto {

@@ -70,6 +70,7 @@ use crate::fit::FitConfig;
 use crate::image::Image;
 use crate::measurement::{Measurement, Outcome, Sample};
 use crate::truth::Shape;
+use crate::virtual_image::pixel_edge::optical_blur;
 use crate::virtual_image::{Kind, Profile};
 use geometry::Geometry;
 use serde::{Deserialize, Serialize};
@@ -349,9 +350,7 @@ impl ModelProfile {
                 ModelProfile::PixelEdge { blur }
             }
             (Kind::Silhouette, _) if config.blur_correction => ModelProfile::PixelEdge {
-                blur: m
-                    .edge_spread
-                    .map_or(0.0, |e| (e.sigma * e.sigma - 1.0 / 12.0).max(0.0).sqrt()),
+                blur: m.edge_spread.map_or(0.0, |e| optical_blur(e.sigma)),
             },
             (kind, _) => ModelProfile::Paper {
                 kind,

@@ -126,7 +126,7 @@ impl Profile {
                 (kind.gamma(rho), kind.gamma_prime(rho) / half_width)
             }
             Profile::PixelEdge { blur } => {
-                let variance = blur * blur + 1.0 / 12.0;
+                let variance = pixel_edge::spread_variance(blur);
                 let t = r - 0.5 * variance * curvature;
                 let (cdf, pdf) = pixel_edge::pixel_edge_cdf(t, normal[0], normal[1], blur);
                 (1.0 - cdf, -pdf)

@@ -57,6 +57,24 @@ fn widths(nx: f64, ny: f64, s: f64) -> (f64, f64) {
 }
 /// Smallest blur used, pixels: a smaller one gives the same profile.
 pub(crate) const MIN_BLUR: f64 = 1e-3;
+/// The variance of a square pixel's own spread across an edge, px^2.
+const PIXEL_VARIANCE: f64 = 1.0 / 12.0;
+
+/// The variance `v` of the whole spread across an edge under an optical
+/// blur of standard deviation `blur` (pixels): the blur's and the square
+/// pixel's own, px^2.
+#[inline]
+pub(crate) fn spread_variance(blur: f64) -> f64 {
+    blur * blur + PIXEL_VARIANCE
+}
+
+/// The optical blur (pixels) whose whole spread has the standard
+/// deviation `spread` (pixels, an edge-spread estimate): the inverse of
+/// [`spread_variance`], 0 for a spread under the pixel's own.
+#[inline]
+pub(crate) fn optical_blur(spread: f64) -> f64 {
+    (spread * spread - PIXEL_VARIANCE).max(0.0).sqrt()
+}
 
 /// Standard normal distribution function (the reference for
 /// [`normal_cdf_pdf`]).
