@@ -16,10 +16,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "star-a0.2/blur4/noise0/8bit/bright/circle-0.85r",
         "scatter/sigma 3.50",
     ),
-    (
-        "sine-line/blur4/noise0/8bit/bright/auto",
-        "ends 12.8 px from the border",
-    ),
     // Since the pixel-edge profile models a corner's blurred wedge
     // (`virtual_image::corner`) these two noiseless pentagons fail by
     // little: the first's largest error (2.3e-3 px, at a corner) is
@@ -33,18 +29,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
         "polygon-breaks/blur4/noise0/16bit/dark/circle-10pct",
         "scatter/sigma 0.48",
-    ),
-    // With a line's blur and width estimated on every band pixel and the
-    // width taken in the middle of those the data cannot tell apart, the
-    // blur-4 rings of the full sweep halved their median |bias| (8.4e-3 to
-    // 4.1e-3 px) and `ring-line/blur4/noise5/8bit/bright/auto` passes; this
-    // one went from 4.2e-3 to 8.6e-3 px (9.7e-3 px on the images rendered
-    // as a camera records them, below). On 12 seeds of such a ring (1 %
-    // noise) the bias is -3.9e-3 px on average with a deviation of 3.6e-3
-    // px from image to image: 5e-3 px is within the noise of one image.
-    (
-        "sine-line/blur4/noise2/8bit/dark/auto",
-        "|bias| 1.18e-2 > 5e-3; ends 12.7 px from the border",
     ),
     // The images are rendered as a camera records them since the blur
     // acts before the pixels integrate (`render::blur`); before, the blur

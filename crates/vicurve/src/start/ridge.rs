@@ -17,7 +17,14 @@
 //!    line ends or fades), when it turns by more than `MAX_TURN` in one
 //!    step (a junction or a corner), at the rectangle's border, or when it
 //!    comes back to the start (a closed line).
-//! 3. The two halves joined, lightly smoothed, make the starting polyline:
+//! 3. **Ends at the border.** The smoothing and the recentring need
+//!    `max(2 sigma, 3)` px of image around a point, so following stops
+//!    that far inside the rectangle's border. An end stopped there (not by
+//!    a fading line or a turn) is continued straight along its last
+//!    direction to the outermost pixel centres: a line crossing the image
+//!    is measured from border to border (the fit trims it where its band
+//!    leaves the image), not 12 px short at a 6 px scale.
+//! 4. The two halves joined, lightly smoothed, make the starting polyline:
 //!    on the line's axis within a few tenths of a pixel.
 //!
 //! Edge cases: without a picked point, with a picked point outside the
@@ -61,6 +68,9 @@ const MAX_TURN: f64 = 0.5;
 const STEP: f64 = 1.0;
 /// Spacing of the samples across the line when recentring, pixels.
 const ACROSS_STEP: f64 = 0.25;
+/// An end continued to the border turns as its last this many points
+/// (pixels) did.
+const CURVATURE_SPAN: usize = 10;
 /// A followed line needs this many points (pixels).
 const MIN_POINTS: usize = 12;
 
@@ -122,9 +132,19 @@ pub fn find_line(image: &Image, config: &StartConfig) -> Result<LineStart> {
         (p, true)
     } else {
         let backward = smoothed.follow(&start, -1.0, strength0, margin);
-        let mut p: Vec<[f64; 2]> = backward.points.into_iter().rev().collect();
+        let border = |half: &Followed| {
+            let reach = 2.0 * margin + STEP;
+            let mut points = vec![start.point];
+            points.extend(half.points.iter());
+            half.border
+                .map(|d| to_border(&points, d, rect, reach))
+                .unwrap_or_default()
+        };
+        let mut p: Vec<[f64; 2]> = border(&backward).into_iter().rev().collect();
+        p.extend(backward.points.iter().rev());
         p.push(start.point);
-        p.extend(forward.points);
+        p.extend(forward.points.iter());
+        p.extend(border(&forward));
         (p, false)
     };
     if points.len() < MIN_POINTS {
@@ -260,6 +280,64 @@ struct OnLine {
 struct Followed {
     points: Vec<[f64; 2]>,
     closed: bool,
+    /// The direction along the line at the last point, when following
+    /// stopped at the rectangle's margin (not at the line's end).
+    border: Option<[f64; 2]>,
+}
+
+/// Points about `STEP` apart continuing the followed `points` (whose
+/// last one stopped at the margin, heading along the unit direction `d`)
+/// up to the outermost pixel centres of `rect`, the last one on them: an
+/// arc of the curvature the last `CURVATURE_SPAN` points turn by. Empty
+/// when that is farther than `reach` px (an end stopped at the margin is
+/// that near the border, unless it runs along it).
+fn to_border(points: &[[f64; 2]], d: [f64; 2], rect: Rect, reach: f64) -> Vec<[f64; 2]> {
+    let Some(&end) = points.last() else {
+        return Vec::new();
+    };
+    let lo = [rect.x0 as f64, rect.y0 as f64];
+    let hi = [(rect.x1 - 1) as f64, (rect.y1 - 1) as f64];
+    let inside = |p: [f64; 2]| (0..2).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+    // The turn per pixel of the last points' chords.
+    let heading = |a: [f64; 2], b: [f64; 2]| (b[1] - a[1]).atan2(b[0] - a[0]);
+    let n = points.len();
+    let curvature = if n > CURVATURE_SPAN {
+        let (a, m, b) = (
+            points[n - 1 - CURVATURE_SPAN],
+            points[n - 1 - CURVATURE_SPAN / 2],
+            end,
+        );
+        let turn = heading(m, b) - heading(a, m);
+        let turn =
+            (turn + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        turn / (0.5 * (dist(a, m) + dist(m, b)))
+    } else {
+        0.0
+    };
+    let mut out = Vec::new();
+    let (mut p, mut angle) = (end, d[1].atan2(d[0]));
+    let mut travelled = 0.0;
+    while travelled < reach {
+        let next = [p[0] + STEP * angle.cos(), p[1] + STEP * angle.sin()];
+        if !inside(next) {
+            // The last point on the border: where this step crosses it.
+            let t = (0..2)
+                .filter_map(|k| {
+                    let v = next[k] - p[k];
+                    (v > 0.0 && next[k] > hi[k])
+                        .then(|| (hi[k] - p[k]) / v)
+                        .or_else(|| (v < 0.0 && next[k] < lo[k]).then(|| (lo[k] - p[k]) / v))
+                })
+                .fold(1.0f64, f64::min);
+            out.push([p[0] + t * (next[0] - p[0]), p[1] + t * (next[1] - p[1])]);
+            return out;
+        }
+        out.push(next);
+        p = next;
+        angle += curvature * STEP;
+        travelled += STEP;
+    }
+    Vec::new()
 }
 
 impl Smoothed {
@@ -371,7 +449,14 @@ impl Smoothed {
         for _ in 0..limit {
             let ahead = [p[0] + STEP * d[0], p[1] + STEP * d[1]];
             let Some(next) = self.recentre(ahead, start.bright, margin) else {
-                break;
+                // Near the border the smoothed image runs out, not the line.
+                let edge = margin + self.scale.max(1.5) + STEP;
+                let at_border = !self.inside(ahead, edge);
+                return Followed {
+                    points,
+                    closed: false,
+                    border: at_border.then_some(d),
+                };
             };
             if next.strength < STOP_FRACTION * strength0 {
                 break;
@@ -393,6 +478,7 @@ impl Smoothed {
                 return Followed {
                     points,
                     closed: true,
+                    border: None,
                 };
             }
             points.push(next.point);
@@ -402,6 +488,7 @@ impl Smoothed {
         Followed {
             points,
             closed: false,
+            border: None,
         }
     }
 }

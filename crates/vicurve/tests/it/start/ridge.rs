@@ -2,7 +2,7 @@
 //! picked point, and the measurement from it.
 
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, FitConfig, Outcome};
+use vicurve::fit::{measure, FitConfig, Measurement, Outcome};
 use vicurve::render::{render, Method, RenderSpec};
 use vicurve::start::ridge::find_line;
 use vicurve::start::StartConfig;
@@ -11,6 +11,16 @@ use vicurve::virtual_image::Kind;
 use vicurve::{Error, Image};
 
 fn line_image(width: usize, height: usize, shape: Shape, line_width: f64, bright: bool) -> Image {
+    blurred_line_image((width, height), shape, line_width, bright, 1.0)
+}
+
+fn blurred_line_image(
+    (width, height): (usize, usize),
+    shape: Shape,
+    line_width: f64,
+    bright: bool,
+    blur_sigma: f64,
+) -> Image {
     let (fg, bg) = if bright { (0.8, 0.2) } else { (0.15, 0.7) };
     render(&RenderSpec {
         width,
@@ -21,7 +31,7 @@ fn line_image(width: usize, height: usize, shape: Shape, line_width: f64, bright
         line_width,
         foreground: fg,
         background: bg,
-        blur_sigma: 1.0,
+        blur_sigma,
         noise: 0.02,
         seed: 3,
         bits: Some(8),
@@ -66,12 +76,18 @@ fn a_closed_bright_line_is_followed_all_round() {
     );
     assert!(found.closed && found.bright);
     assert!(e0.max_abs < 0.5, "{e0:?}");
-    measure_from_the_start(&image, &found.curve, &shape);
+    measure_from_the_start(&image, &found.curve, &shape, 0.05);
 }
 
 /// Measure the line from `start` as a contour: converged, |bias| under
-/// 5e-3 px and every point within 0.05 px of `shape`.
-fn measure_from_the_start(image: &Image, start: &InitialCurve, shape: &Shape) {
+/// 5e-3 px and every point within `max_error` px of `shape`; the
+/// measurement.
+fn measure_from_the_start(
+    image: &Image,
+    start: &InitialCurve,
+    shape: &Shape,
+    max_error: f64,
+) -> Measurement {
     let config = FitConfig {
         kind: Kind::Contour,
         ..FitConfig::default()
@@ -83,11 +99,19 @@ fn measure_from_the_start(image: &Image, start: &InitialCurve, shape: &Shape) {
         e.bias, e.scatter, e.max_abs
     );
     assert_eq!(m.outcome, Outcome::Converged);
-    assert!(e.bias.abs() < 5e-3 && e.max_abs < 0.05, "{e:?}");
+    assert!(e.bias.abs() < 5e-3 && e.max_abs < max_error, "{e:?}");
+    m
 }
 
-/// A dark line across the image (a sine, 4 px wide): followed to near both
-/// borders from a point on it.
+/// A dark line across the image (a sine, 4 px wide; 2.5 px wide under a
+/// 4 px blur, where the ridge is followed at a 6 px scale and stops 12 px
+/// inside the border): the start reaches both borders' outermost pixel
+/// centres from a point on the line, within half a pixel of the axis (a
+/// pixel at the 6 px scale, whose smoothing moves a ridge of 50 px radius
+/// by 0.6 px towards its centre), and the measured curve comes within 10 px
+/// of them (the conformance sweep's bound; the band's reach at 4 px of
+/// blur is 7.7 px). The 2 % noise leaves a scatter of 0.01 px
+/// at 1 px of blur, 0.05 at 4.
 #[test]
 fn an_open_dark_line_is_followed_to_the_borders() {
     let shape = Shape::Sine {
@@ -98,21 +122,28 @@ fn an_open_dark_line_is_followed_to_the_borders() {
         x_min: 0.0,
         x_max: 399.0,
     };
-    let image = line_image(400, 200, shape.clone(), 4.0, false);
-    let found = find_line(&image, &pick(200.0, 100.4 + 1.0)).unwrap();
-    let pts = found.curve.dense_points(1.0).unwrap();
-    let (lo, hi) = pts
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])));
-    let e0 = evaluate(&pts, &shape).unwrap();
-    println!(
-        "sine line: closed {}, bright {}, scale {}, x {lo:.1}..{hi:.1}, start max {:.2}",
-        found.closed, found.bright, found.scale, e0.max_abs
-    );
-    assert!(!found.closed && !found.bright);
-    assert!(lo < 12.0 && hi > 387.0, "{lo} {hi}");
-    assert!(e0.max_abs < 0.5, "{e0:?}");
-    measure_from_the_start(&image, &found.curve, &shape);
+    for (line_width, blur, start_max, max_error) in [(4.0, 1.0, 0.5, 0.05), (2.5, 4.0, 1.0, 0.25)] {
+        let image = blurred_line_image((400, 200), shape.clone(), line_width, false, blur);
+        let found = find_line(&image, &pick(200.0, 100.4 + 1.0)).unwrap();
+        let pts = found.curve.dense_points(1.0).unwrap();
+        let span = |pts: &[[f64; 2]]| {
+            pts.iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])))
+        };
+        let (lo, hi) = span(&pts);
+        let e0 = evaluate(&pts, &shape).unwrap();
+        println!(
+            "sine line, blur {blur}: closed {}, bright {}, scale {}, x {lo:.1}..{hi:.1}, start max {:.2}",
+            found.closed, found.bright, found.scale, e0.max_abs
+        );
+        assert!(!found.closed && !found.bright);
+        assert!(lo < 0.5 && hi > 398.5, "{lo} {hi}");
+        assert!(e0.max_abs < start_max, "{e0:?}");
+        let m = measure_from_the_start(&image, &found.curve, &shape, max_error);
+        let (lo, hi) = span(&m.points());
+        println!("measured x {lo:.1}..{hi:.1}");
+        assert!(lo < 10.0 && hi > 389.0, "{lo} {hi}");
+    }
 }
 
 /// No picked point, a point outside, a point on a blank ground.
