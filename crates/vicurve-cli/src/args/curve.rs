@@ -27,8 +27,8 @@ pub struct CurveArgs {
     /// Coarse-to-fine stages `R:N,...` (band half-width in px : number of
     /// elements, `R:Lpx` for elements of length L px, or `R:auto`). Default:
     /// 20, 10, 5 and 2 px with elements of 80, 40 and 40 px, then automatic
-    /// (40 px halved down to 5 px while it pays), then a band matched to the
-    /// edge's blur when it is wider.
+    /// (40 px halved down to 5 px while it pays), then the edge (or line) as
+    /// a pixel records it through the blur estimated on the image.
     #[arg(long)]
     pub stages: Option<String>,
     /// Degree of the B-splines (1 to 5).

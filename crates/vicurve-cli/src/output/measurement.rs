@@ -139,6 +139,10 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
         println!(
             "edge blur:   {blur:.3} px optical (fitted; the last stage's virtual edge is a pixel through it, so the true boundary is measured)"
         );
+    } else if let Some(Profile::PixelLine { blur, width }) = last_profile {
+        println!(
+            "line blur:   {blur:.3} px optical, width {width:.3} px (estimated; the last stage's virtual line is a pixel through them, so the true axis is measured)"
+        );
     } else if let Some(e) = m.edge_spread {
         println!(
             "edge blur:   {:.3} px ({}; fit quality {:.3})",

@@ -31,25 +31,12 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "scatter/sigma 0.48",
     ),
     // The images are rendered as a camera records them since the blur
-    // acts before the pixels integrate (`render::blur`); before, the blur
-    // of pixel-integrated coverage added an error that depends on where an
-    // edge crosses the pixels (a ring line measured on it scattered by
-    // 5.7e-3 px, on the camera's image by 1.2e-4 px). Errors and sigmas
-    // changed with it, and these two noiseless cases fail: the star's
-    // scatter fell from 2.5e-3 to 7.0e-4 px, below what the misfit term of
-    // its sigma (3.9e-4 px) says; the line's misfit sigma, set on the old
-    // images' errors, is now larger than its scatter (1.3e-3 px for
-    // 4.8e-3), whose largest error, 2.4e-2 px, is at an end. (An ellipse
-    // and a ring that failed with them pass since sigma counts the rounding
-    // of 8-bit levels; a sine edge whose bias, 2.2e-3 px at 2 % noise, was
-    // one image's noise passes since the bias is judged against its noise.)
+    // acts before the pixels integrate (`render::blur`). This noiseless
+    // star's scatter fell with it from 2.5e-3 to 7.0e-4 px, below what the
+    // misfit term of its sigma (3.9e-4 px) says.
     (
         "star-a0.2/blur1/noise0/16bit/dark/polyline-1.5px",
         "scatter/sigma 1.81",
-    ),
-    (
-        "sine-line/blur1/noise0/16bit/dark/polyline-1.5px",
-        "max 2.38e-2 > 8 x scatter 1.32e-3; scatter/sigma 0.27",
     ),
 ];
 

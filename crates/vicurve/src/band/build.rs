@@ -204,7 +204,9 @@ impl Band {
         let reach = params.half_width + params.margin;
         check_inside(curve, reach, params.width, params.height)?;
         let blurred_curvature = match params.profile {
-            Profile::PixelEdge { blur } => BlurredCurvature::new(curve, blur),
+            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+                BlurredCurvature::new(curve, blur)
+            }
             Profile::Paper { .. } => None,
         };
         let pixels = Pixels {

@@ -53,7 +53,7 @@ impl Pixels<'_> {
     ) -> Vec<Vec<Candidate>> {
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let blur = match self.profile {
-            Profile::PixelEdge { blur } => blur,
+            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => blur,
             Profile::Paper { .. } => 0.0,
         };
         let clearances = self.curve.corner_clearances(blur);

@@ -461,7 +461,7 @@ impl Correlation {
         tilt: Option<&MeasuredTilt>,
     ) -> Result<Self> {
         match band.profile() {
-            Profile::PixelEdge { .. } => {
+            Profile::PixelEdge { .. } | Profile::PixelLine { .. } => {
                 Correlation::new_pushed(band, basis, sampler, levels, tilt)
             }
             Profile::Paper { .. } => Correlation::new(band, basis, levels),
@@ -683,7 +683,7 @@ impl Correlation {
         let half_width = band.half_width();
         let corner = match profile {
             Profile::PixelEdge { blur } => band.corner_terms(blur),
-            Profile::Paper { .. } => None,
+            Profile::PixelLine { .. } | Profile::Paper { .. } => None,
         };
         let gamma_at = |i: usize| {
             let u = self.displacement_at(i, lambda);

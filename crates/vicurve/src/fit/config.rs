@@ -75,7 +75,9 @@ impl Stage {
 /// [`FitConfig::blur_correction`] on, one more stage follows: for a
 /// silhouette, the pixel-edge stage ([`crate::virtual_image::Profile::PixelEdge`]:
 /// the step as a pixel records it through the blur, which is fitted); for a
-/// line wider than the last band, a band matched to it (see [`crate::psf`]).
+/// line, the pixel-line stage ([`crate::virtual_image::Profile::PixelLine`]:
+/// the bar as a pixel records it through the blur and width estimated on
+/// the last stage's curve, see [`crate::psf::line_spread`]).
 pub fn default_stages() -> Vec<Stage> {
     let fixed = |half_width: f64, h: f64| Stage {
         half_width,
@@ -134,8 +136,9 @@ pub struct FitConfig {
     /// or centre line rather than the blurred one: the default schedule of a
     /// silhouette ends with the pixel-edge stage (the virtual edge is a pixel
     /// seen through the fitted blur, curvature shift included); a line's
-    /// ends with a band matched to it when needed, and the shift `s^2 kappa /
-    /// 2` the blur causes on curved lines is removed (see [`crate::psf`]).
+    /// with the pixel-line stage (the bar seen through the estimated blur
+    /// and width, the shift `s^2 kappa / 2` the blur causes on curved lines
+    /// included; see [`crate::psf`]).
     /// With explicit stages, the shift is removed when the last band is
     /// matched to the blur. Turn it off for images whose profile is not a
     /// blurred step or bar, such as the paper's synthetic disc rendered with

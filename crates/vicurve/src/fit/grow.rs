@@ -458,13 +458,14 @@ impl<'a> Growth<'a> {
     }
 }
 
-/// The last band of the first measurement with the kind's own profile (the
-/// matched band of a wide line; 2 px for a sharp edge), at least 2 px.
+/// The last band of the first measurement with the kind's own profile or
+/// the pixel line (a line's width and blur; 2 px for a sharp edge), at
+/// least 2 px.
 fn probe_half_width(m: &Measurement) -> f64 {
     m.stages
         .iter()
         .rev()
-        .find(|s| matches!(s.profile, Profile::Paper { .. }))
+        .find(|s| matches!(s.profile, Profile::Paper { .. } | Profile::PixelLine { .. }))
         .map_or(2.0, |s| s.half_width)
         .max(2.0)
 }

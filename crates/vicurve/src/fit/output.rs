@@ -197,7 +197,9 @@ impl<'a> SigmaTerms<'a> {
         // longer holds, unseen by the residuals; longer ones follow what
         // the image shows.
         let shortest = match fin.profile {
-            Profile::PixelEdge { blur } => Some(shortest_element(blur)),
+            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+                Some(shortest_element(blur))
+            }
             Profile::Paper { .. } => {
                 blur.map(|b| std::f64::consts::PI * b * std::f64::consts::FRAC_1_SQRT_2)
             }
@@ -212,7 +214,9 @@ impl<'a> SigmaTerms<'a> {
         });
         // A pixel-edge stage's settles amplify the noise of one fit.
         let gain = match fin.profile {
-            Profile::PixelEdge { blur } => settle_noise_gain(blur, span),
+            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+                settle_noise_gain(blur, span)
+            }
             Profile::Paper { .. } => 1.0,
         };
         let residual = ResidualMisfit::new(&fin.corr, &fin.lambda, sampler);
@@ -238,7 +242,7 @@ impl<'a> SigmaTerms<'a> {
             Profile::Paper {
                 kind: Kind::Silhouette,
             } => Some(None),
-            Profile::Paper { .. } => None,
+            Profile::Paper { .. } | Profile::PixelLine { .. } => None,
         }
         .and_then(|blur| EdgeCheck::new(sampler, &fin.reference, &fin.corr, fin.half_width, blur));
         SigmaTerms {

@@ -1,7 +1,8 @@
 //! The schedule (method, section 6): the stages in turn, coarse to fine,
 //! each stage's result the next one's reference; after the last stage,
 //! the edge's blur chooses a stage to append (the pixel edge through that
-//! blur for a silhouette, a band matched to a wide line), and a tracked
+//! blur for a silhouette, the pixel line through its blur and width for a
+//! line), and a tracked
 //! frame's band is kept for the next frame.
 
 use super::blur::{
@@ -272,9 +273,9 @@ impl<'s> Schedule<'s> {
     /// After the last stage: estimate the edge's blur on the measured
     /// curve and, with the default schedule, measure once more with a
     /// profile matched to it: for a silhouette the pixel edge through that
-    /// blur (exact, see `Profile::PixelEdge`); for a line much wider than
-    /// the last band, a band matched to it (the paper's optimum,
-    /// `R_g = R_f`), where the blur correction is exact.
+    /// blur (exact, see `Profile::PixelEdge`); for a line the pixel line
+    /// through its blur and width (`Profile::PixelLine`). Neither when the
+    /// spread's fit is poor (not a blurred step or bar).
     fn append_matched(&mut self, stage: &Stage) {
         if !self.config.blur_correction || self.tracked.is_some() {
             return;
@@ -284,14 +285,12 @@ impl<'s> Schedule<'s> {
         if self.pixel_edge.is_some() {
             return;
         }
-        let r = stage.half_width;
         self.edge_spread = estimate_spread(self.sampler, &self.current, self.config.kind);
         let chosen = self.last.as_ref().map(|f| f.corr.basis().element_length());
         if let (Some(e), Some(chosen), true, false) =
             (self.edge_spread, chosen, self.auto, self.matched_added)
         {
             let good = e.fit_quality >= MIN_EDGE_FIT_QUALITY;
-            let matched = (matched_band(&e) * 2.0).round() / 2.0;
             if good && self.config.kind == Kind::Silhouette {
                 // Starting from the elements the last stage chose, and
                 // refining further when that stage could (its sine profile
@@ -321,11 +320,26 @@ impl<'s> Schedule<'s> {
                     half_width,
                     elements,
                 });
-            } else if good && matched > BAND_MISMATCH * r {
+            } else if let (true, Some(width)) = (good, e.line_width) {
+                // A line: the pixel line through its blur and width, on
+                // the elements the last stage chose (no shorter than the
+                // blur resolves), its band the pixel edge's beyond each
+                // side.
+                let blur = optical_blur(e.sigma);
+                let elements = Elements::Length(chosen.max(shortest_element(blur)));
                 self.matched_added = true;
+                self.pixel_edge = Some(Profile::PixelLine { blur, width });
+                let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
+                let edge_band = pixel_edge_band_for(
+                    blur,
+                    self.sampler.pixel_noise(),
+                    contrast.map(|(_, c)| c),
+                    self.sampler.quantum(),
+                    self.clear_band_limit(),
+                );
                 self.stages.push(Stage {
-                    half_width: matched,
-                    elements: Elements::Length(chosen),
+                    half_width: ((0.5 * width + edge_band) * 4.0).ceil() / 4.0,
+                    elements,
                 });
             }
         }
@@ -341,7 +355,7 @@ impl<'s> Schedule<'s> {
         {
             self.matched_added = true;
             self.stages.push(Stage {
-                half_width: r,
+                half_width: stage.half_width,
                 elements: Elements::Length(chosen),
             });
         }
@@ -372,7 +386,7 @@ impl<'s> Schedule<'s> {
         // narrower than it (a narrow band sees only the middle of a wide
         // edge, and stays between the half-level and the boundary). A
         // pixel-edge profile models the shift already.
-        let pixel_edge_result = matches!(fin.profile, Profile::PixelEdge { .. });
+        let pixel_edge_result = fin.profile.is_pushed();
         let blur = self
             .edge_spread
             .filter(|_| !pixel_edge_result)

@@ -9,6 +9,7 @@ mod breaks;
 mod far;
 mod grow;
 mod levels;
+mod lines;
 mod paper_disc;
 mod probe;
 mod robust;

@@ -119,6 +119,7 @@ fn stage_sums(all: &AllResult) -> Vec<StageSum> {
         for (k, s) in m.stages.iter().enumerate() {
             let profile = match s.profile {
                 Profile::PixelEdge { .. } => "pixel edge".to_string(),
+                Profile::PixelLine { .. } => "pixel line".to_string(),
                 p => p.to_string(),
             };
             let label = format!("{}. R = {} px, {profile}", k + 1, s.half_width);
