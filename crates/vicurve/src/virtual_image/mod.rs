@@ -78,24 +78,27 @@ pub enum Profile {
     },
     /// A silhouette as an ideal square pixel records it through a Gaussian
     /// blur of `blur` pixels: `gamma = 1 - P(T <= r - v kappa / 2)`
-    /// ([`pixel_edge::pixel_edge_cdf`]), where the pixel's trapezoid follows
-    /// the local normal and `v = blur^2 + 1/12` is the variance of the whole
-    /// spread. The term `v kappa / 2` is the first-order displacement of the
-    /// half-level of a blurred curved edge (`kappa` the signed curvature,
-    /// see [`crate::psf::curvature_shift`]): with it, the fitted curve is the
-    /// true boundary, not the blurred image's half-level.
+    /// ([`pixel_edge::pixel_edge_cdf`]) to the first order, where the
+    /// pixel's trapezoid follows the local normal and `v = blur^2 + 1/12`
+    /// is the variance of the whole spread. The term `v kappa / 2` is the
+    /// first-order displacement of the half-level of a blurred curved edge
+    /// (`kappa` the signed curvature, see [`crate::psf::curvature_shift`]):
+    /// with it, the fitted curve is the true boundary, not the blurred
+    /// image's half-level. The second order (the curvature's widening and
+    /// skew of the profile too) is `pixel_edge::curved_edge`'s.
     PixelEdge {
         /// Standard deviation of the optical blur, pixels (0: a focused
         /// edge, only the pixel's own integration).
         blur: f64,
     },
     /// A thin line (a bar of `width` pixels) as an ideal square pixel
-    /// records it through a Gaussian blur of `blur` pixels: `gamma = P(|t +
-    /// T| < width / 2)` for `t = r - v kappa / 2`, the two pixel edges
-    /// ([`pixel_edge::pixel_edge_cdf`]) of the bar's sides. The bar is
-    /// symmetric, so its curve is the line's axis; the term `v kappa / 2`
-    /// is the blur's displacement of a curved line's centre, as of an
-    /// edge's half level. Exact where the paper's bell is not: on a
+    /// records it through a Gaussian blur of `blur` pixels: the two curved
+    /// pixel edges (`pixel_edge::curved_edge`) of the bar's sides, `gamma
+    /// = g(r - width / 2) - g(r + width / 2)` (`g` the level on an edge's
+    /// bright side). The bar is symmetric, so its curve is the line's
+    /// axis; the curvature moves, widens and skews both sides alike, the
+    /// blur's displacement of a curved line's centre (`v kappa / 2` to the
+    /// first order, as of an edge's half level). Exact where the paper's bell is not: on a
     /// focused line a few pixels wide the bell's misfit aliases with the
     /// pixel grid, by some hundredths of a pixel where the line runs along
     /// a row.
@@ -152,20 +155,17 @@ impl Profile {
                 (kind.gamma(rho), kind.gamma_prime(rho) / half_width)
             }
             Profile::PixelEdge { blur } => {
-                let variance = pixel_edge::spread_variance(blur);
-                let t = r - 0.5 * variance * curvature;
-                let (cdf, pdf) = pixel_edge::pixel_edge_cdf(t, normal[0], normal[1], blur);
-                (1.0 - cdf, -pdf)
+                pixel_edge::curved_edge(r, normal[0], normal[1], blur, curvature)
             }
             Profile::PixelLine { blur, width } => {
-                let variance = pixel_edge::spread_variance(blur);
-                let t = r - 0.5 * variance * curvature;
+                // The bar between its sides at `r = -w/2` and `r = w/2`:
+                // the level on the bright side of the outer one less that
+                // on the bright side of the inner one.
                 let half = 0.5 * width;
-                let (cdf_in, pdf_in) =
-                    pixel_edge::pixel_edge_cdf(half - t, normal[0], normal[1], blur);
-                let (cdf_out, pdf_out) =
-                    pixel_edge::pixel_edge_cdf(half + t, normal[0], normal[1], blur);
-                (cdf_in + cdf_out - 1.0, pdf_out - pdf_in)
+                let side =
+                    |r: f64| pixel_edge::curved_edge(r, normal[0], normal[1], blur, curvature);
+                let ((outer, d_outer), (inner, d_inner)) = (side(r - half), side(r + half));
+                (outer - inner, d_outer - d_inner)
             }
         }
     }
@@ -225,8 +225,9 @@ mod tests {
         }
     }
 
-    /// The pixel line's derivative is its value's, and a line far wider
-    /// than its blur is the two pixel edges of its sides.
+    /// The pixel line's derivative is its value's, a straight one is
+    /// symmetric, and a line far wider than its blur is the two pixel
+    /// edges of its sides.
     #[test]
     fn the_pixel_line_is_two_pixel_edges() {
         let line = Profile::PixelLine {
@@ -241,10 +242,11 @@ mod tests {
             let fd =
                 (line.eval(r + h, 5.0, n, 0.01).0 - line.eval(r - h, 5.0, n, 0.01).0) / (2.0 * h);
             assert!((fd - d).abs() < 1e-6, "{r}: {fd} {d}");
-            // Symmetric about the (curvature-shifted) axis.
-            let shift = 0.5 * pixel_edge::spread_variance(0.7) * 0.01;
-            let mirrored = line.eval(2.0 * shift - r, 5.0, n, 0.01).0;
-            assert!((g - mirrored).abs() < 1e-9, "{r}");
+            // Straight, it is symmetric about its axis.
+            let straight = line.eval(r, 5.0, n, 0.0).0;
+            let mirrored = line.eval(-r, 5.0, n, 0.0).0;
+            assert!((straight - mirrored).abs() < 1e-9, "{r}");
+            assert!(g.is_finite());
         }
         let wide = Profile::PixelLine {
             blur: 0.5,

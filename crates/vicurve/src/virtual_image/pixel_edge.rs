@@ -76,6 +76,58 @@ pub(crate) fn optical_blur(spread: f64) -> f64 {
     (spread * spread - PIXEL_VARIANCE).max(0.0).sqrt()
 }
 
+/// `(gamma, d gamma / d r)` of a blurred curved edge at signed distance
+/// `r` (pixels) from it, for a pixel whose foot on the edge has the unit
+/// normal `(nx, ny)` and the signed curvature `curvature` (1/px, of the
+/// convention of [`super::Profile::eval`]), under the optical blur `blur`
+/// (pixels): the pixel edge ([`pixel_edge_cdf`]) moved by the curvature's
+/// shift and widened by its spread, plus the spread's skew, all to the
+/// second order in `v kappa` (`v` = [`spread_variance`]).
+///
+/// Why: near a point of the edge, with `x` its arc length, the edge is
+/// `y = f(x)`, `f(x) = kappa x^2 / 2 + kappa' x^3 / 6 + (kappa'' + 3
+/// kappa^3) x^4 / 24`. Along the normal there a Gaussian of variance `v`
+/// sees the level `E[Phi((y - f(X)) / sqrt v)]` with `X ~ N(0, v)`: the
+/// straight edge's profile averaged over the random offset `f(X)`. The
+/// offset's mean `v kappa / 2 + v^2 (kappa'' + 3 kappa^3) / 8` moves the
+/// profile (the term in `kappa''` is the blurred curvature's,
+/// `band/blurred_curvature.rs`); its variance `v^2 kappa^2 / 2` widens
+/// it; its third cumulant `k3 = v^3 kappa^3` skews it by `k3 / 6` times
+/// the third derivative of `Phi`. The half level then lies `v kappa / 2 +
+/// v^2 kappa'' / 8 + 5 v^2 kappa^3 / 24` in. With the first order alone a
+/// disc of radius 20 px under a 4 px blur looks 1 % blurrier than it is:
+/// the blur's fit takes that for blur, and the first-order shift with
+/// that larger `v` puts the edge out by `v^2 kappa^3 / 2` (tested against
+/// the blurred disc's exact integral, and measured in
+/// `fit::bias::a_small_disc_under_a_heavy_blur_keeps_its_radius`). The
+/// pixel's square spread is not Gaussian; its share `1/12` of `v` matters
+/// little where these terms do.
+#[inline]
+pub(crate) fn curved_edge(r: f64, nx: f64, ny: f64, blur: f64, curvature: f64) -> (f64, f64) {
+    let v = spread_variance(blur);
+    let vk = v * curvature;
+    let t = r - 0.5 * vk * (1.0 + 0.75 * vk * curvature);
+    // The curve's own spread along the normal, added to the blur's.
+    let widened = (blur * blur + 0.5 * vk * vk).sqrt();
+    let (cdf, pdf) = pixel_edge_cdf(t, nx, ny, widened);
+    let (mut gamma, mut slope) = (1.0 - cdf, -pdf);
+    // The skew `(k3 / 6) (x^2 - 1) phi(x)`, `x = t / sqrt v`, where it can
+    // move the edge by more than 1e-7 px.
+    let sd = v.sqrt();
+    let skew = vk * curvature * curvature * sd / 6.0;
+    if skew.abs() * sd > SKEW_FLOOR {
+        let x = t / sd;
+        let phi = (-0.5 * x * x).exp() * (0.5 / PI).sqrt();
+        gamma += skew * (x * x - 1.0) * phi;
+        slope += skew / sd * x * (3.0 - x * x) * phi;
+    }
+    (gamma, slope)
+}
+
+/// The curved edge's skew is left out where it moves the edge by less
+/// than this, pixels.
+const SKEW_FLOOR: f64 = 1e-7;
+
 /// Standard normal distribution function (the reference for
 /// [`normal_cdf_pdf`]).
 #[cfg(test)]
@@ -239,6 +291,78 @@ fn pixel_edge_cdf_direct(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+    /// The level of a disc blurred by a Gaussian, from its exact integral
+    /// (Simpson, radially and for the Bessel function), against
+    /// `curved_edge` with the same spread variance (a diagonal normal, so
+    /// that the pixel's part is nearly Gaussian too), over two spreads each
+    /// side: within 3.1e-4 of the contrast on a radius of 10 px under a
+    /// spread of 2 px, 1.4e-5 on 20 px, where the first order alone (the
+    /// straight edge's profile moved by `v kappa / 2`) errs by 3.4e-3.
+    #[test]
+    fn the_curved_edge_is_the_blurred_disc() {
+        let simpson = |n: usize, h: f64, f: &dyn Fn(f64) -> f64| {
+            let s: f64 = (0..=n)
+                .map(|k| {
+                    let w = if k == 0 || k == n {
+                        1.0
+                    } else if k % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
+                    w * f(k as f64 * h)
+                })
+                .sum();
+            s * h / 3.0
+        };
+        // `exp(-x) I0(x)`.
+        let i0e = |x: f64| simpson(200, PI / 200.0, &|t| (x * (t.cos() - 1.0)).exp()) / PI;
+        // The level at distance `rho` from the centre of a disc of radius
+        // `r` under a Gaussian of variance `v`.
+        let level = |rho: f64, r: f64, v: f64| {
+            simpson(2000, r / 2000.0, &|s| {
+                s / v * (-(s - rho).powi(2) / (2.0 * v)).exp() * i0e(s * rho / v)
+            })
+        };
+        let n = FRAC_1_SQRT_2;
+        let mut first_worst: f64 = 0.0;
+        for (r, v) in [(10.0, 4.0), (20.0, 4.0), (10.0, 1.0)] {
+            let blur = (v - PIXEL_VARIANCE).sqrt();
+            // The outward normal: the curvature is -1 / r.
+            let kappa = -1.0 / r;
+            let worst = (-20..=20)
+                .map(|i| {
+                    let d = i as f64 * 0.1 * v.sqrt();
+                    let exact = level(r + d, r, v);
+                    let (model, _) = curved_edge(d, n, n, blur, kappa);
+                    let first = 1.0 - pixel_edge_cdf(d + 0.5 * v / r, n, n, blur).0;
+                    first_worst = first_worst.max((first - exact).abs());
+                    (model - exact).abs()
+                })
+                .fold(0.0, f64::max);
+            println!("r {r}, v {v}: the curved edge within {worst:.2e} of the blurred disc");
+            assert!(worst < 4e-4, "r {r}, v {v}: {worst}");
+        }
+        println!("the first order alone within {first_worst:.2e}");
+        assert!(first_worst > 3e-3, "{first_worst}");
+    }
+
+    /// `curved_edge`'s slope is its value's derivative.
+    #[test]
+    fn the_curved_edge_slope_is_its_derivative() {
+        for kappa in [-0.08, 0.0, 0.03] {
+            for i in -30..=30 {
+                let r = i as f64 * 0.25;
+                let h = 1e-6;
+                let (_, d) = curved_edge(r, 0.6, 0.8, 3.0, kappa);
+                let fd = (curved_edge(r + h, 0.6, 0.8, 3.0, kappa).0
+                    - curved_edge(r - h, 0.6, 0.8, 3.0, kappa).0)
+                    / (2.0 * h);
+                assert!((fd - d).abs() < 1e-6, "kappa {kappa}, r {r}: {fd} vs {d}");
+            }
+        }
+    }
+
     use super::*;
 
     /// Brute force: the pixel's coverage by the half-plane, averaged over a
