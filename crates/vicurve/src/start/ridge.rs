@@ -20,10 +20,10 @@
 //! 3. **Ends at the border.** The smoothing and the recentring need
 //!    `max(2 sigma, 3)` px of image around a point, so following stops
 //!    that far inside the rectangle's border. An end stopped there (not by
-//!    a fading line or a turn) is continued straight along its last
-//!    direction to the outermost pixel centres: a line crossing the image
-//!    is measured from border to border (the fit trims it where its band
-//!    leaves the image), not 12 px short at a 6 px scale.
+//!    a fading line or a turn) is continued along an arc of its last
+//!    points' curvature to the outermost pixel centres: a line crossing
+//!    the image is measured from border to border (the fit trims it where
+//!    its band leaves the image), not 12 px short at a 6 px scale.
 //! 4. The two halves joined, lightly smoothed, make the starting polyline:
 //!    on the line's axis within a few tenths of a pixel.
 //!
