@@ -5,7 +5,9 @@
 //! a warning), 1 an error in the input or the files, 2 a usage error, 3 a
 //! fit that diverged (its outputs are still written) or, for a sequence
 //! (`track`, `run`), frames that failed (the others are measured and
-//! written; `summary.csv` says which failed and why).
+//! written; `summary.csv` says which failed and why). Output piped into
+//! a reader that stops early (`| head`) ends the program quietly, as it
+//! does the shell's own tools, not with a panic.
 //!
 //! The crate in layers; a module imports only from the layers below it:
 //!
@@ -73,7 +75,24 @@ enum Command {
     Grid(grid::Args),
 }
 
+/// Let a closed output pipe end the program, as it does the shell's tools:
+/// Rust ignores `SIGPIPE`, so `println!` to a reader that has gone panics.
+/// Results are written to files as they are made, so those already made
+/// stay.
+#[cfg(unix)]
+fn restore_sigpipe() {
+    // SAFETY: first thing in `main`, before any thread exists; `SIG_DFL`
+    // is a valid disposition for `SIGPIPE`.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn restore_sigpipe() {}
+
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Measure(a) => measure::run(*a),

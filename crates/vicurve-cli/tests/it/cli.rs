@@ -576,3 +576,26 @@ fn measure_with_a_model() {
     assert!((r["value"].as_f64().unwrap() - 60.0).abs() < 0.01, "{r}");
     assert!(r["sigma"].as_f64().unwrap() > 0.0, "{r}");
 }
+
+/// Output piped into a reader that has stopped (`vicurve eval ... |
+/// head`) ends the program quietly, with no panic on stderr.
+#[test]
+fn a_closed_output_pipe_is_not_a_panic() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let (img, truth) = disc(dir.path());
+    let points = p(dir.path(), "points.csv");
+    let out = vicurve(&["measure", &img, "--points", &points]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vicurve"))
+        .args(["eval", &points, &truth])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes before the statistics are printed.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
