@@ -342,9 +342,17 @@ impl ModelProfile {
     /// The profile matching a B-spline measurement: its last stage's
     /// pixel edge (or, for a silhouette with blur correction, the pixel
     /// edge through the blur estimated on the edge), else the paper's
-    /// profile over its last band, shifted by the blur it corrected.
+    /// profile over the last band that had it (a line's pixel-line stage
+    /// has no model counterpart: the one before it), shifted by the blur
+    /// it corrected.
     pub fn from_measurement(m: &Measurement, config: &FitConfig) -> ModelProfile {
         let last = m.stages.last();
+        let last_paper = m
+            .stages
+            .iter()
+            .rev()
+            .find(|s| matches!(s.profile, Profile::Paper { .. }))
+            .or(last);
         match (config.kind, last.map(|s| s.profile)) {
             (Kind::Silhouette, Some(Profile::PixelEdge { blur })) => {
                 ModelProfile::PixelEdge { blur }
@@ -354,7 +362,7 @@ impl ModelProfile {
             },
             (kind, _) => ModelProfile::Paper {
                 kind,
-                half_width: last.map_or(2.0, |s| s.half_width),
+                half_width: last_paper.map_or(2.0, |s| s.half_width),
                 blur_variance: match (kind, m.blur_corrected, m.edge_spread) {
                     (Kind::Contour, true, Some(e)) => e.sigma * e.sigma,
                     _ => 0.0,

@@ -13,6 +13,7 @@ use crate::image::Image;
 use crate::interp::Sampler;
 use crate::model::measure_model;
 use crate::start::{free_run, smooth, MIN_BOUNDARY};
+use crate::virtual_image::Profile;
 
 /// Least gap (px) to another region for an object to be measured: the
 /// model fit's first band at a blur of 1 px (4.75 px) and a pixel.
@@ -235,14 +236,25 @@ fn check_curve(c: &Candidate, m: &Measurement) -> Option<ObjectFailure> {
 }
 
 /// A diverged model fit, or one whose residual is far above the free
-/// curve's ([`MISFIT_RATIO`]).
+/// curve's ([`MISFIT_RATIO`]) measured with the same profile: a line's
+/// model takes the paper's profile, so its curve's residual is the last
+/// stage's with that profile, not the pixel line's, which fits a line's
+/// pixels far closer than any bell.
 fn check_model(f: &crate::model::ModelFit, m: &Measurement) -> Option<ObjectFailure> {
     if let Outcome::Diverged { divergence } = f.outcome {
         return Some(ObjectFailure::Model {
             message: divergence.to_string(),
         });
     }
-    let curve_rms = m.residual_rms();
+    let curve_rms = match m.stages.last().map(|s| s.profile) {
+        Some(Profile::PixelLine { .. }) => m
+            .stages
+            .iter()
+            .rev()
+            .find(|s| matches!(s.profile, Profile::Paper { .. }))
+            .map_or(m.residual_rms(), |s| s.residual_rms),
+        _ => m.residual_rms(),
+    };
     let floor = curve_rms.max(0.01 * f.c.abs());
     if f.residual_rms.is_nan() || f.residual_rms > MISFIT_RATIO * floor {
         return Some(ObjectFailure::ModelMisfit {
