@@ -38,7 +38,9 @@
 //! at a flagged sample its distance is the misfit at least. A band that
 //! holds no crossing (or whose levels have no contrast) sees no edge: the
 //! curve left it there, which no residual shows, as the band sees only a
-//! plateau.
+//! plateau. Where the levels may not be fitted yet (a fit stopped by its
+//! iteration limit), the band's own range across the normal
+//! ([`band_range`]) tells a plateau from an edge instead.
 
 use crate::correlation::{Correlation, ResidualBin};
 use crate::curve::SplineCurve;
@@ -240,6 +242,38 @@ impl<'a> EdgeCheck<'a> {
     }
 }
 
+/// A band whose image varies by less than this many noise deviations
+/// sees a plateau (`Schedule::check_plateau`): the cubic interpolant of
+/// white noise spans up to about 7 along a 40 px band (tested).
+pub(super) const PLATEAU_NOISE: f64 = 10.0;
+/// ... or by less than this fraction of the edge's contrast.
+pub(super) const PLATEAU_CONTRAST: f64 = 0.25;
+/// An iteration-limit result whose plateaus make up this share of its
+/// samples is off the edge, however short each one.
+pub(super) const PLATEAU_SHARE: f64 = 0.25;
+
+/// The range of the image (largest less smallest interpolated value, gray
+/// levels) along the normal `n` through `p` over `half_width` pixels on
+/// each side, read `CROSSING_STEP` apart (0 where none of it is in the
+/// image): how much a band there can see of any edge. A plateau's is a
+/// few noise deviations; a band across an edge sees its contrast.
+pub(super) fn band_range(sampler: &Sampler, p: [f64; 2], n: [f64; 2], half_width: f64) -> f64 {
+    let steps = (half_width / CROSSING_STEP).ceil() as i64;
+    let (lo, hi) = (-steps..=steps)
+        .filter_map(|k| {
+            let t = k as f64 * CROSSING_STEP;
+            sampler.value(p[0] + t * n[0], p[1] + t * n[1])
+        })
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if hi >= lo {
+        hi - lo
+    } else {
+        0.0
+    }
+}
+
 /// The offset `t` (pixels, within `half_width` of 0) nearest 0 at which
 /// `value(t)` crosses `half`, by linear interpolation between samples
 /// `CROSSING_STEP` apart; `None` if it does not within the band (or only
@@ -370,6 +404,45 @@ mod tests {
             println!("blur {blur}: half level within {worst:.2e} px of the edge");
             assert!(worst < bound, "blur {blur}: {worst}");
         }
+    }
+
+    /// A band's range on white noise stays under `PLATEAU_NOISE`
+    /// deviations (the largest of 400 bands 40 px long: 6.6), and across
+    /// an edge it is the contrast.
+    #[test]
+    fn a_plateau_s_band_range_is_a_few_noise_deviations() {
+        let sigma = 0.01;
+        let spec = RenderSpec {
+            width: 200,
+            height: 200,
+            shape: Shape::Circle {
+                cx: 100.3,
+                cy: 99.6,
+                r: 40.0,
+            },
+            kind: Kind::Silhouette,
+            method: Method::Coverage,
+            foreground: 0.8,
+            background: 0.2,
+            blur_sigma: 1.0,
+            noise: sigma / 0.6,
+            seed: 5,
+            bits: None,
+            ..RenderSpec::default()
+        };
+        let sampler = Sampler::new(&render(&spec).unwrap(), Interpolation::CubicBSpline);
+        let noise = sampler.pixel_noise();
+        let worst = (0..400)
+            .map(|k| {
+                let a = k as f64 * 0.37;
+                let p = [30.0 + (k % 20) as f64 * 7.0, 160.0 + (k / 20) as f64];
+                band_range(&sampler, p, [a.cos(), a.sin()], 20.0) / noise
+            })
+            .fold(0.0, f64::max);
+        println!("noise {noise:.4}: a plateau's band range up to {worst:.2} deviations");
+        assert!(worst < 0.8 * PLATEAU_NOISE, "{worst}");
+        let across = band_range(&sampler, [140.3, 99.6], [1.0, 0.0], 5.0);
+        assert!((across - 0.6).abs() < 0.05, "{across}");
     }
 
     /// The crossing nearest 0, interpolated; none beyond the band.

@@ -4,7 +4,7 @@
 
 use super::blur::{settle_noise_gain, shortest_element};
 use super::breaks;
-use super::misfit::{oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
+use super::misfit::{band_range, oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
 use super::refine::displacement;
 use super::{LevelSample, Sample};
@@ -290,6 +290,34 @@ impl<'a> SigmaTerms<'a> {
             None => (misfit, true),
         }
     }
+}
+
+/// The middle of the longest stretch of `samples` (of a closed curve or
+/// not) whose bands, `half_width` pixels on each side along their normals
+/// on the image of `sampler`, each vary by less than `threshold` gray
+/// levels ([`band_range`]): plateaus, where the curve is off any edge its
+/// band could see; when that stretch is at least `span` pixels long, or
+/// such samples make up `share` of them. For results whose levels may not
+/// be fitted yet (an iteration limit), where the level crossing's test
+/// cannot tell a plateau from levels without contrast.
+pub(super) fn plateau_stretch(
+    samples: &[Sample],
+    sampler: &Sampler,
+    (half_width, threshold): (f64, f64),
+    closed: bool,
+    (span, share): (f64, f64),
+) -> Option<[f64; 2]> {
+    let lost: Vec<bool> = samples
+        .par_iter()
+        .map(|s| band_range(sampler, [s.x, s.y], [s.nx, s.ny], half_width) < threshold)
+        .collect();
+    let plateaus = lost.iter().filter(|&&l| l).count() as f64;
+    let span = if plateaus >= share * samples.len() as f64 {
+        0.0
+    } else {
+        span
+    };
+    lost_stretch(samples, &lost, closed, span)
 }
 
 /// The middle of the longest run of consecutive `samples` marked `lost`

@@ -10,7 +10,8 @@ use super::blur::{
     MIN_EDGE_FIT_QUALITY,
 };
 use super::loops;
-use super::output::{plain_samples, Final, Output};
+use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
+use super::output::{plain_samples, plateau_stretch, Final, Output};
 use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
@@ -407,6 +408,8 @@ impl<'s> Schedule<'s> {
         )?;
         self.check_loops(&samples, curve.is_closed());
         self.check_edge(lost_edge);
+        let span = fin.corr.basis().element_length();
+        self.check_plateau(&samples, (fin.half_width, span), curve.is_closed());
         self.check_contrast();
         if let Some(cache) = cache {
             self.keep_band(fin, cache);
@@ -454,6 +457,46 @@ impl<'s> Schedule<'s> {
             return;
         }
         if let Some([x, y]) = lost {
+            self.outcome = Outcome::Diverged {
+                divergence: Divergence::LostEdge { x, y },
+            };
+            if let Some(last) = self.reports.last_mut() {
+                last.outcome = self.outcome;
+            }
+        }
+    }
+
+    /// An iteration-limit result with a stretch an element long or more,
+    /// or stretches making up `PLATEAU_SHARE` of it, where the band sees a
+    /// plateau ([`plateau_stretch`]: its image varies by less than
+    /// `PLATEAU_NOISE` noise deviations and than `PLATEAU_CONTRAST` of the
+    /// edge's contrast) is diverged: the curve is off the edge there, and
+    /// stopping early does not make that a result to warn about. Long
+    /// elements leave the lobes they cannot reach in stretches shorter
+    /// than an element, between which the curve crosses the edge: hence
+    /// the share. A converged result has the level-crossing test instead
+    /// ([`Self::check_edge`]); an iteration limit may come before the
+    /// levels are fitted, whose missing contrast is no sign of a plateau.
+    /// `(half_width, span)`: the last band's half-width and element
+    /// length, pixels.
+    fn check_plateau(&mut self, samples: &[Sample], (half_width, span): (f64, f64), closed: bool) {
+        if self.outcome != Outcome::IterationLimit {
+            return;
+        }
+        let noise = self
+            .sampler
+            .pixel_noise()
+            .max(self.sampler.rounding_variance().sqrt());
+        let contrast = self.reports.last().map_or(0.0, |r| r.c.abs());
+        let threshold = (PLATEAU_NOISE * noise).max(PLATEAU_CONTRAST * contrast);
+        let stretch = plateau_stretch(
+            samples,
+            self.sampler,
+            (half_width, threshold),
+            closed,
+            (span, PLATEAU_SHARE),
+        );
+        if let Some([x, y]) = stretch {
             self.outcome = Outcome::Diverged {
                 divergence: Divergence::LostEdge { x, y },
             };

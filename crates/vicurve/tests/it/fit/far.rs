@@ -168,3 +168,47 @@ fn a_curve_off_the_edge_is_diverged() {
     // Where it left the edge, the curve is more than the band's 5 px off.
     assert!(spec.shape.signed_distance(x, y).abs() > 5.0);
 }
+
+/// The same star stopped by its iteration limit: the curve is as far off
+/// the lobes, and stopping early does not make that a warning on a
+/// result (exit 0): it is diverged, by the plateau its band sees there.
+/// A fit stopped while its band still holds the edge everywhere (the
+/// same start on a disc of the star's mean radius) stays an iteration
+/// limit.
+#[test]
+fn a_curve_off_the_edge_at_the_iteration_limit_is_diverged() {
+    let (spec, init, mut config) =
+        super::long_element_star((255.8, 255.3), 140.0, 512, (256.8, 254.3), 100.0);
+    config.max_iterations = 6;
+    let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
+    let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
+    println!(
+        "stopped off the lobes: {} (max error {:.1} px)",
+        m.outcome, s.max_abs
+    );
+    assert!(s.max_abs > 5.0);
+    let Outcome::Diverged {
+        divergence: Divergence::LostEdge { x, y },
+    } = m.outcome
+    else {
+        panic!("{}", m.outcome);
+    };
+    assert!(spec.shape.signed_distance(x, y).abs() > 5.0);
+
+    let disc = crate::common::spec(
+        Shape::Circle {
+            cx: 255.8,
+            cy: 255.3,
+            r: 0.9 * 140.0,
+        },
+        (512, 512),
+        1.5,
+        0.01,
+        7,
+        Some(8),
+    );
+    config.max_iterations = 1;
+    let m = measure(&render(&disc).unwrap(), &init, &config).unwrap();
+    println!("stopped within reach: {}", m.outcome);
+    assert_eq!(m.outcome, Outcome::IterationLimit);
+}

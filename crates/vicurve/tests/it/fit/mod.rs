@@ -49,6 +49,19 @@ fn star_with_long_elements(
     start: (f64, f64),
     h: f64,
 ) -> (Measurement, RenderSpec) {
+    let (spec, init, config) = long_element_star(c, r0, size, start, h);
+    let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
+    (m, spec)
+}
+
+/// The image, start and configuration of [`star_with_long_elements`].
+fn long_element_star(
+    c: (f64, f64),
+    r0: f64,
+    size: usize,
+    start: (f64, f64),
+    h: f64,
+) -> (RenderSpec, InitialCurve, FitConfig) {
     let shape = Shape::Star {
         cx: c.0,
         cy: c.1,
@@ -68,8 +81,7 @@ fn star_with_long_elements(
         cy: start.1,
         r: 0.85 * r0,
     };
-    let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
-    (m, spec)
+    (spec, init, config)
 }
 
 fn run(spec: &RenderSpec, init: InitialCurve, config: FitConfig) -> (Measurement, ErrorStats) {
