@@ -43,8 +43,10 @@ pub enum Divergence {
         y: f64,
     },
     /// The curve left the edge near this point: along a stretch of at
-    /// least an element where the residuals flag a misfit, the band holds
-    /// no edge (no crossing of the half level within `R` of the curve).
+    /// least an element, the band holds no edge (no crossing of the half
+    /// level within `R` of the curve; for a fit stopped by its iteration
+    /// limit, an image that varies across the band no more than a
+    /// plateau's, along an element or a quarter of the curve).
     LostEdge {
         /// x (column), pixels.
         x: f64,
