@@ -271,6 +271,19 @@ impl<'s> Schedule<'s> {
         0.5 * size
     }
 
+    /// The pixel edge's band for the optical `blur` (pixels) on this image,
+    /// with the contrast the last stage measured ([`pixel_edge_band_for`]).
+    fn pixel_edge_band(&self, blur: f64) -> f64 {
+        let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
+        pixel_edge_band_for(
+            blur,
+            self.sampler.pixel_noise(),
+            contrast.map(|(_, c)| c),
+            self.sampler.quantum(),
+            self.clear_band_limit(),
+        )
+    }
+
     /// After the last stage: estimate the edge's blur on the measured
     /// curve and, with the default schedule, measure once more with a
     /// profile matched to it: for a silhouette the pixel edge through that
@@ -309,16 +322,8 @@ impl<'s> Schedule<'s> {
                 };
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelEdge { blur });
-                let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
-                let half_width = pixel_edge_band_for(
-                    blur,
-                    self.sampler.pixel_noise(),
-                    contrast.map(|(_, c)| c),
-                    self.sampler.quantum(),
-                    self.clear_band_limit(),
-                );
                 self.stages.push(Stage {
-                    half_width,
+                    half_width: self.pixel_edge_band(blur),
                     elements,
                 });
             } else if let (true, Some(width)) = (good, e.line_width) {
@@ -330,16 +335,9 @@ impl<'s> Schedule<'s> {
                 let elements = Elements::Length(chosen.max(shortest_element(blur)));
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelLine { blur, width });
-                let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
-                let edge_band = pixel_edge_band_for(
-                    blur,
-                    self.sampler.pixel_noise(),
-                    contrast.map(|(_, c)| c),
-                    self.sampler.quantum(),
-                    self.clear_band_limit(),
-                );
+                let half_width = 0.5 * width + self.pixel_edge_band(blur);
                 self.stages.push(Stage {
-                    half_width: ((0.5 * width + edge_band) * 4.0).ceil() / 4.0,
+                    half_width: (half_width * 4.0).ceil() / 4.0,
                     elements,
                 });
             }
