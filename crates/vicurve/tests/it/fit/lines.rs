@@ -27,10 +27,10 @@ fn focused_line(shape: Shape) -> RenderSpec {
 }
 
 /// A ring and a sine, both running along pixel rows in places (where the
-/// bell's misfit aliased most: on the sine's crests, errors of 3e-2 px
-/// over 20 px of arc, and a scatter of 7.5e-3 px on the sweep's sine
-/// line). The last stage is the pixel line through the estimated width,
-/// and the curve lies on the line's axis within 1.5e-3 px of scatter.
+/// bell's misfit aliased most, one sign over tens of pixels; its figures
+/// are in docs/benchmarks.md). The last stage is the pixel line through
+/// the estimated width, and the curve lies on the line's axis within
+/// 1.5e-3 px of scatter.
 #[test]
 fn a_focused_thin_line_is_measured_with_the_pixel_line() {
     let config = FitConfig {
