@@ -363,6 +363,16 @@ impl Measurement {
         self.stages.last().map_or(f64::NAN, |s| s.residual_rms)
     }
 
+    /// The last stage measured with the paper's profile (a line's
+    /// pixel-line stage and a silhouette's pixel-edge stage come after
+    /// it): the one a model with the paper's profile compares with.
+    pub fn last_paper_stage(&self) -> Option<&StageReport> {
+        self.stages
+            .iter()
+            .rev()
+            .find(|s| matches!(s.profile, Profile::Paper { .. }))
+    }
+
     /// Arc length of the measured curve, pixels.
     pub fn length(&self) -> f64 {
         self.curve.arc_length()

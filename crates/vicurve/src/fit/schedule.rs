@@ -437,30 +437,31 @@ impl<'s> Schedule<'s> {
         }
         let points: Vec<[f64; 2]> = samples.iter().map(|s| [s.x, s.y]).collect();
         if let Some(divergence) = loops::looped(&points, closed) {
-            self.outcome = Outcome::Diverged { divergence };
-            if let Some(last) = self.reports.last_mut() {
-                last.outcome = self.outcome;
-            }
+            self.diverge_result(divergence);
+        }
+    }
+
+    /// The result diverged by `divergence`, its last stage's report too.
+    fn diverge_result(&mut self, divergence: Divergence) {
+        self.outcome = Outcome::Diverged { divergence };
+        if let Some(last) = self.reports.last_mut() {
+            last.outcome = self.outcome;
         }
     }
 
     /// A converged result that left the edge along a stretch of an element
     /// or more (`lost`, where; see `output::lost_stretch`) is diverged: the
     /// band holds no edge there, so neither the curve nor its `sigma` says
-    /// where the edge is. An iteration limit is left as it is: the check
-    /// reads the half level of the fitted gray levels, which a fit stopped
-    /// early (a single iteration from 10 px off) may not have yet.
+    /// where the edge is. Only a converged one: the check reads the half
+    /// level of the fitted gray levels, which a fit stopped early (a single
+    /// iteration from 10 px off) may not have yet; an iteration limit has
+    /// [`Self::check_plateau`].
     fn check_edge(&mut self, lost: Option<[f64; 2]>) {
         if self.outcome != Outcome::Converged {
             return;
         }
         if let Some([x, y]) = lost {
-            self.outcome = Outcome::Diverged {
-                divergence: Divergence::LostEdge { x, y },
-            };
-            if let Some(last) = self.reports.last_mut() {
-                last.outcome = self.outcome;
-            }
+            self.diverge_result(Divergence::LostEdge { x, y });
         }
     }
 
@@ -495,12 +496,7 @@ impl<'s> Schedule<'s> {
             (span, PLATEAU_SHARE),
         );
         if let Some([x, y]) = stretch {
-            self.outcome = Outcome::Diverged {
-                divergence: Divergence::LostEdge { x, y },
-            };
-            if let Some(last) = self.reports.last_mut() {
-                last.outcome = self.outcome;
-            }
+            self.diverge_result(Divergence::LostEdge { x, y });
         }
     }
 
@@ -517,12 +513,7 @@ impl<'s> Schedule<'s> {
             return;
         };
         if c < MIN_CONTRAST_FRACTION * gray_range(self.sampler) {
-            self.outcome = Outcome::Diverged {
-                divergence: Divergence::NoContrast,
-            };
-            if let Some(last) = self.reports.last_mut() {
-                last.outcome = self.outcome;
-            }
+            self.diverge_result(Divergence::NoContrast);
         }
     }
 

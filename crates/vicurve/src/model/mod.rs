@@ -347,12 +347,7 @@ impl ModelProfile {
     /// it corrected.
     pub fn from_measurement(m: &Measurement, config: &FitConfig) -> ModelProfile {
         let last = m.stages.last();
-        let last_paper = m
-            .stages
-            .iter()
-            .rev()
-            .find(|s| matches!(s.profile, Profile::Paper { .. }))
-            .or(last);
+        let last_paper = m.last_paper_stage().or(last);
         match (config.kind, last.map(|s| s.profile)) {
             (Kind::Silhouette, Some(Profile::PixelEdge { blur })) => {
                 ModelProfile::PixelEdge { blur }

@@ -248,10 +248,7 @@ fn check_model(f: &crate::model::ModelFit, m: &Measurement) -> Option<ObjectFail
     }
     let curve_rms = match m.stages.last().map(|s| s.profile) {
         Some(Profile::PixelLine { .. }) => m
-            .stages
-            .iter()
-            .rev()
-            .find(|s| matches!(s.profile, Profile::Paper { .. }))
+            .last_paper_stage()
             .map_or(m.residual_rms(), |s| s.residual_rms),
         _ => m.residual_rms(),
     };

@@ -6,8 +6,8 @@
 
 use super::stages;
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, Divergence, Elements, FitConfig, Outcome};
-use vicurve::render::render;
+use vicurve::fit::{measure, Divergence, Elements, FitConfig, Measurement, Outcome};
+use vicurve::render::{render, RenderSpec};
 use vicurve::truth::{evaluate, Shape};
 
 use crate::common::{disc, spec};
@@ -153,11 +153,15 @@ fn a_start_that_never_reaches_the_edge_diverges() {
 fn a_curve_off_the_edge_is_diverged() {
     let (m, spec) =
         super::star_with_long_elements((255.8, 255.3), 140.0, 512, (256.8, 254.3), 100.0);
+    assert_lost_edge("a curve off the edge", &m, &spec);
+}
+
+/// `m` is more than 5 px off `spec`'s shape somewhere (the elements do
+/// not follow the lobes) and diverged with a lost edge, at a point more
+/// than the last band's 5 px off the shape.
+fn assert_lost_edge(name: &str, m: &Measurement, spec: &RenderSpec) {
     let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
-    println!(
-        "a curve off the edge: {} (max error {:.1} px)",
-        m.outcome, s.max_abs
-    );
+    println!("{name}: {} (max error {:.1} px)", m.outcome, s.max_abs);
     assert!(s.max_abs > 5.0, "the elements should not follow the lobes");
     let Outcome::Diverged {
         divergence: Divergence::LostEdge { x, y },
@@ -165,7 +169,6 @@ fn a_curve_off_the_edge_is_diverged() {
     else {
         panic!("{}", m.outcome);
     };
-    // Where it left the edge, the curve is more than the band's 5 px off.
     assert!(spec.shape.signed_distance(x, y).abs() > 5.0);
 }
 
@@ -181,19 +184,7 @@ fn a_curve_off_the_edge_at_the_iteration_limit_is_diverged() {
         super::long_element_star((255.8, 255.3), 140.0, 512, (256.8, 254.3), 100.0);
     config.max_iterations = 6;
     let m = measure(&render(&spec).unwrap(), &init, &config).unwrap();
-    let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
-    println!(
-        "stopped off the lobes: {} (max error {:.1} px)",
-        m.outcome, s.max_abs
-    );
-    assert!(s.max_abs > 5.0);
-    let Outcome::Diverged {
-        divergence: Divergence::LostEdge { x, y },
-    } = m.outcome
-    else {
-        panic!("{}", m.outcome);
-    };
-    assert!(spec.shape.signed_distance(x, y).abs() > 5.0);
+    assert_lost_edge("stopped off the lobes", &m, &spec);
 
     let disc = crate::common::spec(
         Shape::Circle {
