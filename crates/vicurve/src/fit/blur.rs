@@ -318,20 +318,7 @@ pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
         let gx = g * x * x;
         (1.0 - gx * (-0.5 * gx).exp()).powi(-2)
     };
-    let n = 16;
-    let sum: f64 = (0..=n)
-        .map(|i| {
-            let w = if i == 0 || i == n {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            w * f(i as f64 / n as f64)
-        })
-        .sum();
-    (sum / (3.0 * n as f64)).sqrt()
+    psf::simpson(0.0, 1.0, 16, f).sqrt()
 }
 
 #[cfg(test)]

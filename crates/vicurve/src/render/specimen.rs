@@ -162,20 +162,7 @@ mod tests {
             let x = j as f64;
             let w = |x: f64| s.bar.width_at(x);
             // Composite Simpson over 16 sub-intervals.
-            let m = 16;
-            let mean = (0..=m)
-                .map(|k| {
-                    let c = if k == 0 || k == m {
-                        1.0
-                    } else if k % 2 == 1 {
-                        4.0
-                    } else {
-                        2.0
-                    };
-                    c * w(x - 0.5 + k as f64 / m as f64)
-                })
-                .sum::<f64>()
-                / (3.0 * m as f64);
+            let mean = crate::psf::simpson(x - 0.5, x + 0.5, 16, w);
             assert!((sum - mean).abs() < 1e-6, "column {j}: {sum} vs {mean}");
         }
     }

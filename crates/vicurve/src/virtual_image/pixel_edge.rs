@@ -300,27 +300,13 @@ mod tests {
     /// straight edge's profile moved by `v kappa / 2`) errs by 3.4e-3.
     #[test]
     fn the_curved_edge_is_the_blurred_disc() {
-        let simpson = |n: usize, h: f64, f: &dyn Fn(f64) -> f64| {
-            let s: f64 = (0..=n)
-                .map(|k| {
-                    let w = if k == 0 || k == n {
-                        1.0
-                    } else if k % 2 == 1 {
-                        4.0
-                    } else {
-                        2.0
-                    };
-                    w * f(k as f64 * h)
-                })
-                .sum();
-            s * h / 3.0
-        };
+        use crate::psf::simpson;
         // `exp(-x) I0(x)`.
-        let i0e = |x: f64| simpson(200, PI / 200.0, &|t| (x * (t.cos() - 1.0)).exp()) / PI;
+        let i0e = |x: f64| simpson(0.0, PI, 200, |t| (x * (t.cos() - 1.0)).exp()) / PI;
         // The level at distance `rho` from the centre of a disc of radius
         // `r` under a Gaussian of variance `v`.
         let level = |rho: f64, r: f64, v: f64| {
-            simpson(2000, r / 2000.0, &|s| {
+            simpson(0.0, r, 2000, |s| {
                 s / v * (-(s - rho).powi(2) / (2.0 * v)).exp() * i0e(s * rho / v)
             })
         };
