@@ -91,8 +91,33 @@ fn restore_sigpipe() {
 #[cfg(not(unix))]
 fn restore_sigpipe() {}
 
+/// Let glibc's allocator keep the memory a fit frees for its next
+/// allocations: blocks under 16 MiB from the heap (not mapped afresh from
+/// the kernel and unmapped when freed), and up to 32 MiB of free memory
+/// kept at the heap's top. A fit builds a band of a few megabytes at every
+/// stage and re-reference and frees the previous one; with glibc's
+/// defaults each new band's pages are faulted in and zeroed by the kernel
+/// again. Larger blocks (a megapixel image's buffers) are still mapped,
+/// which bounds what is kept (docs/benchmarks.md, "Speed of one
+/// measurement").
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn keep_freed_memory() {
+    // SAFETY: first thing in `main` after the signal disposition, before
+    // any allocation of ours or any thread; `mallopt` only sets the
+    // allocator's thresholds (its return value, 0 on an unknown option,
+    // leaves the defaults in place).
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 16 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 32 << 20);
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn keep_freed_memory() {}
+
 fn main() -> ExitCode {
     restore_sigpipe();
+    keep_freed_memory();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Measure(a) => measure::run(*a),
