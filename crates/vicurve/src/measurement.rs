@@ -136,6 +136,13 @@ pub struct StageReport {
     pub rereferences: usize,
     /// Band pixels of the last reference.
     pub band_pixels: usize,
+    /// 1, or `k` for a coarse stage that ran on the image binned by `k`
+    /// (the means of its `k x k` blocks, see `fit::pyramid`): its band
+    /// pixels, residual and iterations' residuals are then the binned
+    /// image's, its iterations' steps full-resolution pixels. Absent
+    /// from result files when 1.
+    #[serde(default = "unbinned", skip_serializing_if = "is_unbinned")]
+    pub binning: usize,
     /// RMS of the residual `g - f` at the last iteration, gray levels.
     pub residual_rms: f64,
     /// Dark level `a` of the virtual image at the end of the stage.
@@ -150,6 +157,16 @@ pub struct StageReport {
     /// result files written before it was recorded).
     #[serde(default)]
     pub history: Vec<IterationRecord>,
+}
+
+/// [`StageReport::binning`] of a stage on the image itself.
+fn unbinned() -> usize {
+    1
+}
+
+/// Whether a stage ran on the image itself (`binning` 1).
+fn is_unbinned(binning: &usize) -> bool {
+    *binning == 1
 }
 
 /// Which run of a stage an iteration belongs to.

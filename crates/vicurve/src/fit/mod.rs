@@ -51,6 +51,7 @@ mod loops;
 mod misfit;
 mod output;
 mod probe;
+mod pyramid;
 mod reference;
 mod refine;
 mod robust;

@@ -136,12 +136,18 @@ pub(super) struct Schedule<'s> {
     /// Whether the stage running is the probe ([`super::probe`]), which
     /// stops at its first new reference.
     pub probing: bool,
+    /// The image binned for coarse stages, by binning ([`super::pyramid`]),
+    /// made on first use.
+    pub binned: Vec<(usize, Sampler)>,
+    /// Whether a binned stage completed: its result is the current curve,
+    /// though `last` holds no system of it.
+    pub binned_done: bool,
 }
 
 impl<'s> Schedule<'s> {
     /// The schedule of `config` (or of `tracked`) from `reference`, with the
     /// tracking cache's band when it serves.
-    fn new(
+    pub(super) fn new(
         sampler: &'s Sampler,
         reference: SplineCurve,
         config: &FitConfig,
@@ -194,12 +200,14 @@ impl<'s> Schedule<'s> {
             matched_added: tracked.is_some(),
             pixel_edge: tracked.map(|t| t.profile()),
             probing: false,
+            binned: Vec::new(),
+            binned_done: false,
             config,
         })
     }
 
     /// Run the stages in turn, appending those the edge's blur calls for.
-    fn run(&mut self) -> Result<()> {
+    pub(super) fn run(&mut self) -> Result<()> {
         let mut next = self.probe()?;
         while next < self.stages.len() {
             let k = next;
@@ -209,7 +217,16 @@ impl<'s> Schedule<'s> {
             if self.auto && !is_last && self.too_wide(&stage) {
                 continue;
             }
-            match self.run_stage(&stage, is_last)? {
+            let flow = match self.run_binned(&stage, is_last) {
+                Some(flow) => flow,
+                None => {
+                    // The stages narrow: the binned images are done with
+                    // (a megapixel image's take a few megabytes each).
+                    self.binned.clear();
+                    self.run_stage(&stage, is_last)?
+                }
+            };
+            match flow {
                 Flow::Completed if is_last => self.append_matched(&stage),
                 Flow::Completed | Flow::Skipped => {}
                 Flow::Stop | Flow::TooFar => break,

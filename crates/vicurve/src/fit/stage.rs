@@ -148,6 +148,7 @@ impl StageState {
             iterations: self.iterations,
             rereferences: self.rereferences,
             band_pixels,
+            binning: 1,
             residual_rms: self.step.map_or(f64::NAN, |s| s.residual_rms),
             a: self.step.map_or(f64::NAN, |s| s.a),
             c: self.step.map_or(f64::NAN, |s| s.c),
@@ -343,7 +344,7 @@ impl Schedule<'_> {
             .unwrap_or_else(|| st.stage.element_count(length, self.min_el));
         let basis = breaks::displacement_basis(&self.current, self.config.degree, n_elements)?;
         if let Err(e) = trimmed {
-            let first_band = self.last.is_none() && st.iterations == 0;
+            let first_band = self.first_band(st);
             return self
                 .band_outside(st, e, (profile, &basis), first_band)
                 .map(Err);
@@ -478,10 +479,12 @@ impl Schedule<'_> {
         pushed: Option<Profile>,
     ) -> Result<OrFlow<(Correlation, usize)>> {
         let r = st.stage.half_width;
-        let first_band = self.last.is_none() && st.iterations == 0;
+        let first_band = self.first_band(st);
         // Coarse stages (all but the last) only bring the curve near the
         // edge: half the pixels do that, a quarter in bands of 16 px or
-        // more (at least 8 pixels across per unit of length).
+        // more (at least 8 pixels across per unit of length). Those of a
+        // closed curve run on a binned image instead (`super::pyramid`),
+        // where they are their schedule's last and keep every pixel.
         let thin = match (st.is_last, r >= 16.0) {
             (true, _) => 1,
             (false, false) => 2,
@@ -532,6 +535,14 @@ impl Schedule<'_> {
                 Ok(Err(Flow::Stop))
             }
         }
+    }
+
+    /// Whether a run builds the schedule's first band: no stage completed
+    /// before it (on the image or binned, [`super::pyramid`]) and its stage
+    /// has not iterated yet. A first band that cannot be built is the
+    /// start's fault (an error), a later one the fit's (a divergence).
+    fn first_band(&self, st: &StageState) -> bool {
+        self.last.is_none() && !self.binned_done && st.iterations == 0
     }
 
     /// The margin of a run's band beyond its half-width, pixels: a tracked

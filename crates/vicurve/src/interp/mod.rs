@@ -133,6 +133,10 @@ pub struct Sampler {
     /// B-spline), mirrored into a `(width + 2 pad) x (height + 2 pad)`
     /// frame.
     coef: Arc<Vec<f64>>,
+    /// The image's own pixels, row after row, shared with the image (not
+    /// copied): what a binned level of the image is made of
+    /// ([`Sampler::image_pixels`]); empty for a binned level itself.
+    pixels: Arc<Vec<f64>>,
     /// [`Sampler::gray_range`], computed on first use and shared by clones.
     range: Arc<std::sync::OnceLock<f64>>,
     /// [`Sampler::quantum`], likewise.
@@ -144,13 +148,34 @@ pub struct Sampler {
 impl Sampler {
     /// Prepares `image` for interpolation of the given kind: `O(w h)` time,
     /// one padded copy of the image in memory; bilinear interpolation
-    /// instead shares the image's pixels (no copy, constant time).
+    /// instead shares the image's pixels (no copy, constant time). The
+    /// sampler shares the image's pixels either way (a fit's coarse stages
+    /// bin them), so they stay in memory as long as it does.
     pub fn new(image: &Image, kind: Interpolation) -> Self {
+        Sampler::with_pixels(image, kind, true)
+    }
+
+    /// [`Sampler::new`] for a binned level of an image (`fit::pyramid`):
+    /// it keeps no pixels of its own to bin further (a bilinear level's
+    /// coefficients are its pixels).
+    pub(crate) fn binned_level(image: &Image, kind: Interpolation) -> Self {
+        Sampler::with_pixels(image, kind, false)
+    }
+
+    /// [`Sampler::new`], keeping the image's pixels when `keep`.
+    fn with_pixels(image: &Image, kind: Interpolation, keep: bool) -> Self {
+        let pixels = || {
+            if keep {
+                image.shared_data()
+            } else {
+                Arc::default()
+            }
+        };
         let (w, h) = (image.width(), image.height());
         // The bilinear stencil of a point in the domain stays in the image
         // (`cell_x_max`, `cell_y_max`) when both sides have two pixels.
         if kind == Interpolation::Bilinear && w >= 2 && h >= 2 {
-            return Sampler::with_coef(kind, w, h, 0, image.shared_data());
+            return Sampler::with_coef(kind, w, h, 0, image.shared_data(), pixels());
         }
         // The image copied into the middle of the padded buffer, prefiltered
         // there in place for a cubic B-spline, then its border mirrored.
@@ -164,7 +189,7 @@ impl Sampler {
             prefilter::prefilter_2d_in(&mut coef, w, h, stride, PAD);
         }
         prefilter::mirror_border(&mut coef, w, h, stride, PAD);
-        Sampler::with_coef(kind, w, h, PAD, Arc::new(coef))
+        Sampler::with_coef(kind, w, h, PAD, Arc::new(coef), pixels())
     }
 
     fn with_coef(
@@ -173,6 +198,7 @@ impl Sampler {
         h: usize,
         pad: usize,
         coef: Arc<Vec<f64>>,
+        pixels: Arc<Vec<f64>>,
     ) -> Sampler {
         Sampler {
             kind,
@@ -185,6 +211,7 @@ impl Sampler {
             stride: w + 2 * pad,
             pad,
             coef,
+            pixels,
             range: Arc::default(),
             quantum: Arc::default(),
             pixel_noise: Arc::default(),
@@ -204,6 +231,12 @@ impl Sampler {
     /// Image height in pixels.
     pub fn height(&self) -> usize {
         self.height
+    }
+
+    /// The image's pixels as recorded, row after row (`width x height`);
+    /// empty for a binned level ([`Sampler::binned_level`]).
+    pub(crate) fn image_pixels(&self) -> &[f64] {
+        &self.pixels
     }
 
     /// Whether `(x, y)` lies in the domain `[0, width - 1] x [0, height - 1]`

@@ -12,6 +12,7 @@ mod levels;
 mod lines;
 mod paper_disc;
 mod probe;
+mod pyramid;
 mod robust;
 mod sharp;
 mod sigma;
@@ -82,6 +83,21 @@ fn long_element_star(
         r: 0.85 * r0,
     };
     (spec, init, config)
+}
+
+/// The measurement `m` (errors `e` to the truth) converged on the edge:
+/// |bias| within 2e-3 px, scatter within `scatter` px, no sample farther
+/// than 8 times the scatter (or 8e-3 px on a noiseless image).
+fn assert_on_edge(label: &str, m: &Measurement, e: &ErrorStats, scatter: f64) {
+    assert_eq!(m.outcome, Outcome::Converged, "{label}");
+    assert!(e.bias.abs() <= 2e-3, "{label}: bias {}", e.bias);
+    assert!(e.scatter <= scatter, "{label}: scatter {}", e.scatter);
+    assert!(
+        e.max_abs <= 8.0 * e.scatter.max(1e-3),
+        "{label}: max {} scatter {}",
+        e.max_abs,
+        e.scatter
+    );
 }
 
 fn run(spec: &RenderSpec, init: InitialCurve, config: FitConfig) -> (Measurement, ErrorStats) {

@@ -216,8 +216,13 @@ pub fn table(results: &[CaseResult], peers: Option<&Result<Peers, String>>) -> S
                 .iter()
                 .zip(stage_seconds(r))
                 .map(|(st, t)| {
+                    let binned = if st.binning > 1 {
+                        format!("/{}", st.binning)
+                    } else {
+                        String::new()
+                    };
                     format!(
-                        "R{} {}it {:.1}ms",
+                        "R{}{binned} {}it {:.1}ms",
                         st.half_width,
                         st.iterations,
                         t.median * 1e3
@@ -382,18 +387,22 @@ pub fn markdown(
         "| process - in-process total (start-up, parsing, exit) | {} |",
         cells.join(" | ")
     );
-    let _ = writeln!(s, "\n## Stages, in-process\n");
+    let _ = writeln!(
+        s,
+        "\n## Stages, in-process\n\nA coarse stage of a closed curve runs on the image binned by `binning` (the means of its blocks, `fit/pyramid.rs`); its band pixels are the binned image's.\n"
+    );
     for r in results {
         let _ = writeln!(s, "`{}` ({}):\n", r.case.name, r.m.outcome);
         let _ = writeln!(
             s,
-            "| R px | profile | elements | iterations | re-references | band pixels | ms median [min, max] | outcome |\n|---|---|---|---|---|---|---|---|"
+            "| R px | binning | profile | elements | iterations | re-references | band pixels | ms median [min, max] | outcome |\n|---|---|---|---|---|---|---|---|---|"
         );
         for (st, t) in r.m.stages.iter().zip(stage_seconds(r)) {
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 st.half_width,
+                st.binning,
                 profile_name(&st.profile),
                 st.elements,
                 st.iterations,
