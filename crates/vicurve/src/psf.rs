@@ -305,7 +305,7 @@ fn spread_about_mean(data: &[(f64, f64)]) -> Option<f64> {
 
 /// `(r, f)` for the pixels within `half_width` of `curve` (at most about
 /// `max` of them, a regular subsample), sorted by `r`.
-fn band_data(
+pub(crate) fn band_data(
     sampler: &Sampler,
     curve: &SplineCurve,
     half_width: f64,

@@ -50,6 +50,7 @@ pub mod grow;
 mod loops;
 mod misfit;
 mod output;
+mod polarity;
 mod probe;
 mod pyramid;
 mod reference;

@@ -12,6 +12,7 @@ use super::blur::{
 use super::loops;
 use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
 use super::output::{plain_samples, plateau_stretch, Final, Output};
+use super::polarity::line_polarity;
 use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
@@ -24,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::interp::Sampler;
 use crate::psf;
 use crate::virtual_image::pixel_edge::optical_blur;
-use crate::virtual_image::{Kind, Profile};
+use crate::virtual_image::{Kind, Polarity, Profile};
 use std::f64::consts::TAU;
 
 /// Run the schedule of `config` from `reference`; with `tracked`, the
@@ -154,7 +155,7 @@ impl<'s> Schedule<'s> {
         tracked: Option<TrackState>,
         mut cache: Option<&mut TrackCache>,
     ) -> Result<Self> {
-        let config = config.clone();
+        let mut config = config.clone();
         let closed = reference.is_closed();
         let (stages, auto) = match (&config.stages, tracked) {
             (_, Some(t)) => (vec![t.stage()], true),
@@ -164,6 +165,14 @@ impl<'s> Schedule<'s> {
         let min_el = min_elements(closed, config.degree, auto);
         let mut current = breaks::prepare(reference, &config.breaks)?;
         check_open_start(&current, (sampler.width(), sampler.height()))?;
+        // A line's polarity from the widest band around its start, when
+        // the band says it clearly (`super::polarity`).
+        let widest = stages.iter().map(|s| s.half_width).fold(0.0, f64::max);
+        if tracked.is_none() && config.kind == Kind::Contour && config.polarity == Polarity::Auto {
+            if let Some(p) = line_polarity(sampler, &current, widest) {
+                config.polarity = p;
+            }
+        }
         let reuse = match (tracked, cache.as_deref_mut()) {
             (Some(t), Some(c)) => c.take_for(&t, config.levels, sampler, config.coords),
             _ => None,

@@ -11,6 +11,7 @@ mod grow;
 mod levels;
 mod lines;
 mod paper_disc;
+mod polarity;
 mod probe;
 mod pyramid;
 mod robust;
