@@ -15,6 +15,7 @@ mod polarity;
 mod probe;
 mod pyramid;
 mod robust;
+mod run;
 mod sharp;
 mod sigma;
 mod track;
