@@ -5,11 +5,10 @@
 //! start, on the bell's flank, correlates with it as well with a bright
 //! bell as with a dark one, and the contrast the fit estimates from such a
 //! band can take the wrong sign. A bell of the wrong sign then moves the
-//! curve away from the line, and a start 10 px beside a ring diverged (its
-//! contrast falling to nothing) where the same start with the polarity
-//! given converged. The band's gray levels say which it is: a line covers
-//! a few percent of a wide band's pixels, all on one side of the others.
-//! A dark line puts the band's lowest percentile far below its median and
+//! curve away from the line, which a start with the polarity given does
+//! not (docs/benchmarks.md, "A line's polarity from its start"). The
+//! band's gray levels say which it is: a line covers a few percent of a
+//! wide band's pixels, all on one side of the others. A dark line puts the band's lowest percentile far below its median and
 //! leaves its highest within the noise; a bright line the reverse. When
 //! the two tails do not differ that clearly (no line in the band yet, an
 //! edge or uneven light across it), the fit estimates the sign as before.

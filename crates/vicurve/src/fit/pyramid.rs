@@ -26,7 +26,7 @@
 //! image's pixels. Neither are a tracked frame (one stage, the last), the
 //! probe ([`super::probe`]), an automatic stage or the paper's levelset
 //! coordinates (their mesh is in the image's pixels), nor a band under
-//! [`MIN_BINNED_AREA`] pixels, which costs little. A binned stage that
+//! [`MIN_BINNED_AREA`] pixels, which is cheap. A binned stage that
 //! does not complete (its band leaves the binned image, it diverges) runs
 //! again on the image itself, as it would have without binning.
 
@@ -49,9 +49,9 @@ const MIN_BINNED_HALF_WIDTH: f64 = 5.0;
 const BINNINGS: [usize; 2] = [4, 2];
 
 /// Smallest band (pixels of the image: twice the half-width times the
-/// curve's length) that a stage bins: a smaller one costs a millisecond or
-/// less to build and iterate on, so binning saves little, and the image's
-/// own pixels hold the most information.
+/// curve's length) that a stage bins: a smaller one is cheap to build and
+/// iterate on, so binning saves little, and the image's own pixels hold
+/// the most information.
 const MIN_BINNED_AREA: f64 = 16384.0;
 
 /// Smallest side of a binned image, binned pixels: a smaller image has no

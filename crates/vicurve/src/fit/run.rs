@@ -229,9 +229,10 @@ pub(super) fn largest_change(lambda: &[f64], start: Option<&[f64]>) -> f64 {
 
 /// Smallest relaxation factor: steps overshooting up to 20 times are
 /// damped in one step. An open curve's end coefficient barely reaches into
-/// the curve, and a cluttered band's robust run on a thin line overshot it
-/// about 10 times: with a floor of 0.2 that mode contracted by 0.95 a step
-/// (200 iterations), and one overshooting over 10 times would have grown.
+/// the curve, and the step can overshoot it ten times and more (a robust
+/// run on a cluttered band, say); a factor `w` leaves such a mode
+/// contracting by `1 - w lambda` a step, which a higher floor makes slow
+/// or even growing (docs/benchmarks.md, "The relaxation's floor").
 const MIN_RELAXATION: f64 = 0.05;
 
 /// Largest relaxation factor (a creeping mode is lengthened at most this
