@@ -89,6 +89,10 @@ impl Default for LevelModel {
 /// the displacement (shorter elements add more).
 pub const DEFAULT_LEVEL_ELEMENT: f64 = 128.0;
 
+/// Shortest element of varying levels, pixels: each element needs enough
+/// band pixels to fit its levels.
+pub(crate) const MIN_LEVEL_ELEMENT: f64 = 8.0;
+
 /// Most elements of varying levels (longer elements beyond): the dense
 /// systems of the levels stay small.
 pub const MAX_LEVEL_ELEMENTS: usize = 24;
@@ -115,13 +119,13 @@ impl LevelModel {
     }
 
     /// Errors: [`crate::Error::InvalidParameter`] for an element length
-    /// that is not finite or under 8 px.
+    /// that is not finite or under [`MIN_LEVEL_ELEMENT`].
     pub(crate) fn validate(self) -> Result<()> {
         if let LevelModel::Varying { element_length } = self {
-            if !(element_length.is_finite() && element_length >= 8.0) {
+            if !(element_length.is_finite() && element_length >= MIN_LEVEL_ELEMENT) {
                 return Err(crate::Error::invalid(
                     "levels element_length",
-                    format!("{element_length} (must be at least 8 px)"),
+                    format!("{element_length} (must be at least {MIN_LEVEL_ELEMENT} px)"),
                 ));
             }
         }

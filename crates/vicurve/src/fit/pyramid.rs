@@ -33,6 +33,7 @@
 use super::schedule::{Flow, Schedule};
 use super::{Elements, LevelModel, Outcome, Stage};
 use crate::band::Coords;
+use crate::correlation::levels::MIN_LEVEL_ELEMENT;
 use crate::curve::SplineCurve;
 use crate::image::Image;
 use crate::interp::Sampler;
@@ -57,10 +58,6 @@ const MIN_BINNED_AREA: f64 = 16384.0;
 /// Smallest side of a binned image, binned pixels: a smaller image has no
 /// room for a band of [`MIN_BINNED_HALF_WIDTH`] around a curve.
 const MIN_BINNED_SIDE: usize = 16;
-
-/// Shortest element of the varying gray levels on a binned image, binned
-/// pixels (the configuration's floor, see [`LevelModel::Varying`]).
-const MIN_LEVEL_ELEMENT: f64 = 8.0;
 
 /// The image of `sampler` binned by `k` (the mean of each `k x k` block of
 /// its pixels), prepared with the same interpolation; `None` when a side
