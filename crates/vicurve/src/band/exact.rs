@@ -36,7 +36,7 @@ impl Pixels<'_> {
         radix_sort(&mut touched);
         let cutoff2 = (self.reach + sagitta + 1e-6).powi(2);
         let rows = self.project_cells(&grid, scratch.nearest(), &touched, cutoff2);
-        scratch.clear(&touched);
+        scratch.clear(&grid, &touched);
         rows
     }
 
@@ -93,7 +93,7 @@ impl Pixels<'_> {
         if self.thinned_out(grid.gx0 + i, grid.gy0 + j) {
             return None;
         }
-        let (key, u0) = unpack(cell.nearest[c]);
+        let (key, u0) = unpack(cell.nearest[grid.slot(i, j)]);
         if f64::from(key) - 1.0 > cell.cutoff2 {
             return None;
         }

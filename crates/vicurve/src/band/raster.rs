@@ -7,9 +7,13 @@
 //! chord and the parameter of its foot, as `f32` bits packed in a `u64`;
 //! the smaller packed value wins, so the grid does not depend on the order
 //! of the chords. Zero marks a cell no chord reached. The cells reached are
-//! listed, so that neither clearing nor scanning costs the bounding box's
-//! area. The chords are rasterised in [`GRID_PARTS`] runs in parallel,
-//! each on its own grid, merged after.
+//! listed (by their raster index, row after row), so that neither clearing
+//! nor scanning costs the bounding box's area. The grid stores its cells
+//! in tiles of [`TILE_W`] x [`TILE_H`] (one 4 KiB page each): a chord
+//! reaches a compact patch of cells, which row-major storage spreads over
+//! as many pages as the patch has rows (a page fault each on a fresh grid,
+//! a TLB miss each on a kept one). The chords are rasterised in
+//! [`GRID_PARTS`] runs in parallel, each on its own grid, merged after.
 
 use crate::curve::SplineCurve;
 use rayon::prelude::*;
@@ -17,6 +21,11 @@ use std::sync::Mutex;
 
 /// Parallel runs of the chords' rasterisation.
 const GRID_PARTS: usize = 2;
+/// Columns of a tile of the grid's storage (a power of two).
+const TILE_W: usize = 32;
+/// Rows of a tile (a power of two): `TILE_W x TILE_H` cells of 8 bytes
+/// fill a 4 KiB page.
+const TILE_H: usize = 16;
 /// Cells of a grid kept for the next band (128 MB); a larger one is freed.
 const MAX_KEPT_GRID: usize = 1 << 24;
 /// Scratches kept in the pool at most: one per band being built, for two
@@ -67,7 +76,7 @@ impl BandScratch {
     /// grid, [`BandScratch::nearest`]); returns the cells reached, in no
     /// particular order.
     pub(super) fn rasterize(&mut self, chords: &Chords, grid: &GridShape) -> Vec<u32> {
-        let cells = grid.gw * grid.gh;
+        let cells = grid.storage();
         self.grids.resize_with(GRID_PARTS, Vec::new);
         for g in &mut self.grids {
             if g.len() < cells {
@@ -95,7 +104,7 @@ impl BandScratch {
         let mut all = touched.remove(0);
         for (other, cells) in others.iter_mut().zip(touched) {
             for cell in cells {
-                let c = cell as usize;
+                let c = grid.slot_of(cell as usize);
                 let v = std::mem::take(&mut other[c]);
                 if best[c] == 0 {
                     all.push(cell);
@@ -108,22 +117,25 @@ impl BandScratch {
         all
     }
 
-    /// The merged grid of the last [`BandScratch::rasterize`].
+    /// The merged grid of the last [`BandScratch::rasterize`], in the
+    /// storage order of its [`GridShape`] ([`GridShape::slot`]).
     pub(super) fn nearest(&self) -> &[u64] {
         &self.grids[0]
     }
 
-    /// Zero the cells `touched` of the merged grid again.
-    pub(super) fn clear(&mut self, touched: &[u32]) {
+    /// Zero the cells `touched` (raster indices) of the merged grid of
+    /// shape `grid` again.
+    pub(super) fn clear(&mut self, grid: &GridShape, touched: &[u32]) {
         for &cell in touched {
-            self.grids[0][cell as usize] = 0;
+            self.grids[0][grid.slot_of(cell as usize)] = 0;
         }
     }
 }
 
 /// Where [`Chords::rasterize`] writes: the grid's box of pixel centres
 /// `[gx0, gx1] x [gy0, gy1]`, `gw x gh` cells, and how far from a chord it
-/// looks, pixels.
+/// looks, pixels. Cell `(i, j)` (column and row from the box's corner) has
+/// the raster index `j gw + i` and is stored at [`GridShape::slot`].
 pub(super) struct GridShape {
     pub gx0: usize,
     pub gy0: usize,
@@ -157,6 +169,27 @@ impl GridShape {
             reach,
             thin: 1,
         }
+    }
+
+    /// Cells of the grid's storage: whole tiles covering its box.
+    pub fn storage(&self) -> usize {
+        self.gw.div_ceil(TILE_W) * self.gh.div_ceil(TILE_H) * TILE_W * TILE_H
+    }
+
+    /// Where the cell of column `i` and row `j` (from the box's corner) is
+    /// stored: its tile's place (row-major among the tiles), then its
+    /// place in the tile (row-major).
+    #[inline]
+    pub fn slot(&self, i: usize, j: usize) -> usize {
+        let tiles_x = self.gw.div_ceil(TILE_W);
+        let tile = (j / TILE_H) * tiles_x + i / TILE_W;
+        tile * (TILE_W * TILE_H) + (j % TILE_H) * TILE_W + i % TILE_W
+    }
+
+    /// [`GridShape::slot`] of the cell of raster index `cell`.
+    #[inline]
+    pub fn slot_of(&self, cell: usize) -> usize {
+        self.slot(cell % self.gw, cell / self.gw)
     }
 }
 
@@ -336,7 +369,8 @@ impl Chords {
             if x_hi < x_lo as f64 {
                 continue;
             }
-            let row = (y - grid.gy0) * grid.gw;
+            let j = y - grid.gy0;
+            let row = j * grid.gw;
             // First kept x at or after x_lo.
             let (x_first, step) = match thin {
                 1 => (x_lo, 1),
@@ -347,14 +381,15 @@ impl Chords {
                 continue;
             }
             for x in (x_first..=x_hi as usize).step_by(step) {
-                let cell = row + x - grid.gx0;
+                let i = x - grid.gx0;
+                let slot = grid.slot(i, j);
                 let packed = chord.packed_foot(x as f64 - a[0], py);
-                let old = best[cell];
+                let old = best[slot];
                 if old == 0 {
-                    touched.push(cell as u32);
-                    best[cell] = packed;
+                    touched.push((row + i) as u32);
+                    best[slot] = packed;
                 } else if packed < old {
-                    best[cell] = packed;
+                    best[slot] = packed;
                 }
             }
         }
@@ -426,4 +461,39 @@ fn pack(a: f32, b: f32) -> u64 {
 #[inline]
 pub(super) fn unpack(v: u64) -> (f32, f32) {
     (f32::from_bits((v >> 32) as u32), f32::from_bits(v as u32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GridShape;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every cell of a grid, whatever its size, has a slot of its own
+        /// within the storage.
+        #[test]
+        fn the_tiled_slots_are_a_bijection(gw in 1usize..150, gh in 1usize..90) {
+            let grid = GridShape {
+                gx0: 3,
+                gy0: 5,
+                gx1: 2 + gw,
+                gy1: 4 + gh,
+                gw,
+                gh,
+                reach: 1.0,
+                thin: 1,
+            };
+            let storage = grid.storage();
+            let mut seen = vec![false; storage];
+            for j in 0..gh {
+                for i in 0..gw {
+                    let slot = grid.slot(i, j);
+                    prop_assert!(slot < storage);
+                    prop_assert!(!seen[slot]);
+                    seen[slot] = true;
+                    prop_assert_eq!(grid.slot_of(j * gw + i), slot);
+                }
+            }
+        }
+    }
 }
