@@ -19,7 +19,7 @@
 //! the distance to the circle, with no blur), must not be corrected: see
 //! [`crate::fit::FitConfig::blur_correction`].
 
-use crate::band::Band;
+use crate::band::{Band, BandParams};
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::spline::Basis;
@@ -318,15 +318,13 @@ pub(crate) fn band_data(
         curve.is_closed(),
     )
     .ok()?;
-    let band = Band::build(
-        curve,
-        &basis,
+    let params = BandParams::new(
         half_width,
         Kind::Silhouette,
         sampler.width(),
         sampler.height(),
-    )
-    .ok()?;
+    );
+    let band = Band::distances(curve, &basis, &params).ok()?;
     if band.len() < 50 {
         return None;
     }
@@ -334,11 +332,9 @@ pub(crate) fn band_data(
     // values (what the interpolant returns there).
     let stride = band.len().div_ceil(max).max(1);
     let mut data: Vec<(f64, f64)> = band
-        .positions()
         .iter()
-        .zip(band.r())
         .step_by(stride)
-        .filter_map(|(p, &r)| sampler.pixel(p[0] as usize, p[1] as usize).map(|f| (r, f)))
+        .filter_map(|&(p, r)| sampler.pixel(p[0] as usize, p[1] as usize).map(|f| (r, f)))
         .collect();
     data.sort_by(|a, b| a.0.total_cmp(&b.0));
     Some(data)

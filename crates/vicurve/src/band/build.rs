@@ -231,6 +231,52 @@ impl Band {
         Ok(Band::from_rows(rows, params, basis.degree()))
     }
 
+    /// The centre and signed distance `r` (pixels) of every pixel of the
+    /// band [`Band::new`] builds (raster order), without the rest of the
+    /// band (the basis and profile values at each pixel, its columns): for
+    /// what reads only the image across the curve, such as the edge's
+    /// spread ([`crate::psf`]).
+    ///
+    /// Errors: those of [`Band::new`].
+    pub(crate) fn distances(
+        curve: &SplineCurve,
+        basis: &Basis,
+        params: &BandParams,
+    ) -> Result<Vec<([f64; 2], f64)>> {
+        params.check()?;
+        let reach = params.half_width + params.margin;
+        check_inside(curve, reach, params.width, params.height)?;
+        let pixels = Pixels {
+            curve,
+            basis,
+            blurred_curvature: None,
+            profile: params.profile,
+            half_width: params.half_width,
+            reach,
+            thin: params.thin,
+            width: params.width,
+            height: params.height,
+        };
+        let rows = match params.coords {
+            Coords::Exact => {
+                let mut scratch = BandScratch::from_pool();
+                let rows = pixels.exact_distances(&mut scratch);
+                scratch.return_to_pool();
+                rows
+            }
+            Coords::Levelset { mesh_size } => {
+                let levelsets =
+                    LevelsetCoords::build(curve, reach, mesh_size, params.width, params.height)?;
+                pixels
+                    .levelset_rows(&levelsets)
+                    .into_iter()
+                    .map(|row| row.into_iter().map(|c| (c.foot.pos, c.foot.r)).collect())
+                    .collect()
+            }
+        };
+        Ok(rows.into_iter().flatten().collect())
+    }
+
     /// The band of the pixels `rows` (raster order) for a basis of degree
     /// `p`, windowed on its reference.
     fn from_rows(rows: Vec<Vec<Candidate>>, params: &BandParams, p: usize) -> Band {

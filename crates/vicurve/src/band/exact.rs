@@ -17,6 +17,26 @@ const TOUCHED_CHUNK: usize = 2048;
 impl Pixels<'_> {
     /// The band pixels by exact projection, row by row (raster order).
     pub(super) fn exact_rows(&self, scratch: &mut BandScratch) -> Vec<Vec<Candidate>> {
+        self.exact_with(scratch, |cell, c| self.project_cell(cell, c))
+    }
+
+    /// The centre and signed distance `r` (pixels) of each pixel of
+    /// [`Pixels::exact_rows`], row by row, without what else a band stores
+    /// of it (its basis and profile values).
+    pub(super) fn exact_distances(&self, scratch: &mut BandScratch) -> Vec<Vec<([f64; 2], f64)>> {
+        self.exact_with(scratch, |cell, c| {
+            self.foot_of_cell(cell, c)
+                .map(|(foot, _)| (foot.pos, foot.r))
+        })
+    }
+
+    /// What `keep` makes of each grid cell near the curve (`None`: not a
+    /// band pixel), row by row, in parallel runs of rows.
+    fn exact_with<T: Send>(
+        &self,
+        scratch: &mut BandScratch,
+        keep: impl Fn(&CellSearch, usize) -> Option<T> + Sync,
+    ) -> Vec<Vec<T>> {
         let chords = Chords::new(self.curve, self.reach);
         // A pixel within `reach` of the curve is within `reach + sagitta`
         // of its nearest chord, which the grid reaches with a pixel to
@@ -35,59 +55,70 @@ impl Pixels<'_> {
         // Raster order, whatever order the chords reached the cells in.
         radix_sort(&mut touched);
         let cutoff2 = (self.reach + sagitta + 1e-6).powi(2);
-        let rows = self.project_cells(&grid, scratch.nearest(), &touched, cutoff2);
+        let cell = self.cell_search(&grid, scratch.nearest(), cutoff2);
+        let rows = touched
+            .par_chunks(TOUCHED_CHUNK)
+            .map(|cells| {
+                let mut out = Vec::with_capacity(cells.len());
+                out.extend(cells.iter().filter_map(|&c| keep(&cell, c as usize)));
+                out
+            })
+            .collect();
         scratch.clear(&grid, &touched);
         rows
     }
 
-    /// The cells `touched` (sorted) of the grid `nearest` (the packed
-    /// closest chords of [`BandScratch::rasterize`]) refined on the exact
-    /// curve, in parallel runs of rows: the band's pixels among those whose
-    /// chord is within `sqrt(cutoff2)` pixels.
-    fn project_cells(
+    /// What a cell's search reads: the grid, `nearest` (the packed closest
+    /// chords of [`BandScratch::rasterize`]), the squared cutoff on a
+    /// cell's chord distance, and the corners of the curve.
+    fn cell_search<'g>(
         &self,
-        grid: &GridShape,
-        nearest: &[u64],
-        touched: &[u32],
+        grid: &'g GridShape,
+        nearest: &'g [u64],
         cutoff2: f64,
-    ) -> Vec<Vec<Candidate>> {
+    ) -> CellSearch<'g> {
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let blur = match self.profile {
             Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => blur,
             Profile::Paper { .. } => 0.0,
         };
-        let clearances = self.curve.corner_clearances(blur);
         // The pixel-edge profile's spread, for the corners' wedge terms.
         let spread = match self.profile {
             Profile::PixelEdge { blur } => Some(spread_variance(blur).sqrt()),
             _ => None,
         };
-        let cell = CellSearch {
+        CellSearch {
             grid,
             nearest,
             cutoff2,
-            clearances: &clearances,
+            clearances: self.curve.corner_clearances(blur),
             spread,
-        };
-        touched
-            .par_chunks(TOUCHED_CHUNK)
-            .map(|cells| {
-                let mut out = Vec::with_capacity(cells.len());
-                out.extend(
-                    cells
-                        .iter()
-                        .filter_map(|&c| self.project_cell(&cell, c as usize)),
-                );
-                out
-            })
-            .collect()
+        }
     }
 
-    /// The band pixel of grid cell `c`, if it is one: kept (not thinned
-    /// out), its chord within the cutoff, its closest point an interior
-    /// point of the curve within `reach`, on the near side of the centre of
-    /// curvature and clear of the corners.
+    /// The band pixel of grid cell `c`, if it is one (see
+    /// [`Pixels::foot_of_cell`]), with the corners' wedges that reach it.
     fn project_cell(&self, cell: &CellSearch, c: usize) -> Option<Candidate> {
+        let (foot, jacobian) = self.foot_of_cell(cell, c)?;
+        let (pos, u) = (foot.pos, foot.s);
+        let mut candidate = self.candidate(foot, jacobian);
+        if let Some(spread) = cell.spread {
+            let (length, closed) = (self.curve.param_length(), self.curve.is_closed());
+            let wedges = cell
+                .clearances
+                .iter()
+                .filter_map(|c| c.wedge(pos, u, length, closed, spread));
+            candidate.add_wedges(wedges, spread);
+        }
+        Some(candidate)
+    }
+
+    /// The foot on the curve of grid cell `c` and its area factor (the
+    /// jacobian `1 - kappa r`), if the cell is a band pixel: kept (not
+    /// thinned out), its chord within the cutoff, its closest point an
+    /// interior point of the curve within `reach`, on the near side of the
+    /// centre of curvature and clear of the corners.
+    fn foot_of_cell(&self, cell: &CellSearch, c: usize) -> Option<(Foot, f64)> {
         let grid = cell.grid;
         let (i, j) = (c % grid.gw, c / grid.gw);
         if self.thinned_out(grid.gx0 + i, grid.gy0 + j) {
@@ -119,15 +150,7 @@ impl Pixels<'_> {
             normal: pr.normal,
             curvature: pr.curvature,
         };
-        let mut candidate = self.candidate(foot, jacobian);
-        if let Some(spread) = cell.spread {
-            let wedges = cell
-                .clearances
-                .iter()
-                .filter_map(|c| c.wedge([x, y], pr.u, length, closed, spread));
-            candidate.add_wedges(wedges, spread);
-        }
-        Some(candidate)
+        Some((foot, jacobian))
     }
 }
 
@@ -140,7 +163,7 @@ struct CellSearch<'a> {
     grid: &'a GridShape,
     nearest: &'a [u64],
     cutoff2: f64,
-    clearances: &'a [Clearance],
+    clearances: Vec<Clearance>,
     spread: Option<f64>,
 }
 

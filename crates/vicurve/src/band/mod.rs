@@ -389,7 +389,7 @@ fn displacement(basis: &Basis, first: u32, values: &[f64], lambda: &[f64]) -> f6
 
 #[cfg(test)]
 mod tests {
-    use super::{Band, Coords};
+    use super::{Band, BandParams, Coords};
     use crate::curve::SplineCurve;
     use crate::spline::Basis;
     use crate::virtual_image::{Kind, Profile};
@@ -425,6 +425,58 @@ mod tests {
             let built = build(&fine).unwrap();
             assert!(built.len() > 1000, "{}", built.len());
             assert_eq!(format!("{rebased:?}"), format!("{built:?}"), "{profile:?}");
+        }
+    }
+
+    /// The distances-only band is the band's pixels and `r`, to the bit and
+    /// in its order: on a smooth curve, with exact and levelset coordinates,
+    /// and on a square with corners (whose clearances leave pixels out).
+    #[test]
+    fn the_distances_are_those_of_the_band() {
+        let smooth: Vec<[f64; 2]> = (0..300)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / 300.0;
+                [90.3 + 50.0 * t.cos(), 80.7 + 40.0 * t.sin()]
+            })
+            .collect();
+        let square: Vec<[f64; 2]> = (0..160)
+            .map(|i| {
+                let (side, f) = (i / 40, (i % 40) as f64 / 40.0);
+                let (a, b) = (40.2 + 100.0 * f, 140.2 - 100.0 * f);
+                match side {
+                    0 => [a, 40.4],
+                    1 => [140.2, a],
+                    2 => [b, 140.4],
+                    _ => [40.2, b],
+                }
+            })
+            .collect();
+        let curves = [
+            SplineCurve::fit(&smooth, true, 3, 4.0).unwrap(),
+            SplineCurve::fit_with_corners(&square, true, 3, 4.0, &[0, 40, 80, 120]).unwrap(),
+        ];
+        let levelset = Coords::Levelset { mesh_size: 10.0 };
+        let cases = [
+            (&curves[0], Coords::Exact),
+            (&curves[0], levelset),
+            (&curves[1], Coords::Exact),
+        ];
+        for (curve, coords) in cases {
+            let basis = Basis::new(1, 2, curve.param_length(), true).unwrap();
+            let params = BandParams {
+                coords,
+                ..BandParams::new(6.0, Kind::Silhouette, 190, 180)
+            };
+            let band = Band::new(curve, &basis, &params).unwrap();
+            let distances = Band::distances(curve, &basis, &params).unwrap();
+            assert!(band.len() > 2000, "{}", band.len());
+            let want: Vec<([f64; 2], f64)> = band
+                .positions()
+                .iter()
+                .zip(band.r())
+                .map(|(p, r)| (*p, *r))
+                .collect();
+            assert_eq!(distances, want, "{coords:?}");
         }
     }
 }
