@@ -62,7 +62,9 @@ impl Final {
     /// fitted to them and its largest deviation from them, the output
     /// samples at most `spacing` pixels apart with `sigma` (its misfit
     /// term from the band's residuals on the image of `sampler`), and the
-    /// gray levels along the curve when they vary.
+    /// gray levels along the curve when they vary. Never inlined: `vicurve
+    /// bench speed --profile` tells this phase by its frame.
+    #[inline(never)]
     pub fn samples(
         &self,
         sampler: &Sampler,
