@@ -93,6 +93,30 @@ pub(super) struct Pixels<'a> {
     pub height: usize,
 }
 
+impl<'a> Pixels<'a> {
+    /// The pixels `params` asks for around `curve` (out to its half-width
+    /// plus margin), for `basis`, the pixel-edge profile taking the
+    /// curvature of `blurred_curvature` when given.
+    fn asked(
+        curve: &'a SplineCurve,
+        basis: &'a Basis,
+        params: &BandParams,
+        blurred_curvature: Option<&'a BlurredCurvature>,
+    ) -> Self {
+        Pixels {
+            curve,
+            basis,
+            blurred_curvature,
+            profile: params.profile,
+            half_width: params.half_width,
+            reach: params.half_width + params.margin,
+            thin: params.thin,
+            width: params.width,
+            height: params.height,
+        }
+    }
+}
+
 /// Where a backend puts a pixel: its centre, coordinates `s` and `r`
 /// (pixels), the normal and the curvature (1/px) of the curve at `s`.
 pub(super) struct Foot {
@@ -209,17 +233,7 @@ impl Band {
             }
             Profile::Paper { .. } => None,
         };
-        let pixels = Pixels {
-            curve,
-            basis,
-            blurred_curvature: blurred_curvature.as_ref(),
-            profile: params.profile,
-            half_width: params.half_width,
-            reach,
-            thin: params.thin,
-            width: params.width,
-            height: params.height,
-        };
+        let pixels = Pixels::asked(curve, basis, params, blurred_curvature.as_ref());
         let rows = match params.coords {
             Coords::Exact => pixels.exact_rows(scratch),
             Coords::Levelset { mesh_size } => {
@@ -246,17 +260,7 @@ impl Band {
         params.check()?;
         let reach = params.half_width + params.margin;
         check_inside(curve, reach, params.width, params.height)?;
-        let pixels = Pixels {
-            curve,
-            basis,
-            blurred_curvature: None,
-            profile: params.profile,
-            half_width: params.half_width,
-            reach,
-            thin: params.thin,
-            width: params.width,
-            height: params.height,
-        };
+        let pixels = Pixels::asked(curve, basis, params, None);
         let rows = match params.coords {
             Coords::Exact => {
                 let mut scratch = BandScratch::from_pool();
