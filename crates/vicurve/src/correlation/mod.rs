@@ -642,6 +642,17 @@ impl Correlation {
         self.noise_var
     }
 
+    /// The factor on the noise-only `sigma` that the rounding to the
+    /// image's gray-level steps adds (at least 1): the noise estimate
+    /// ([`Self::estimate_noise`]) misses it, and `sigma` scales as the root
+    /// of the noise variance. 1 before the noise is estimated, or when it
+    /// is estimated as none.
+    pub fn rounding_gain(&self, sampler: &Sampler) -> f64 {
+        self.noise_var
+            .filter(|v| *v > 0.0)
+            .map_or(1.0, |v| (sampler.rounding_variance() / v).max(1.0).sqrt())
+    }
+
     /// Take the noise variance estimated on another run of the stage.
     pub fn set_noise_var(&mut self, noise_var: Option<f64>) {
         self.noise_var = noise_var;

@@ -300,6 +300,47 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
     resolved_element(blur) * std::f64::consts::FRAC_1_SQRT_2
 }
 
+/// The shortest elements a pixel-edge stage may refine to, under an
+/// optical blur of `blur` pixels, on the curve `reference` (the last
+/// stage's), where the schedule's own shortest is `shortest` pixels:
+/// that one, where the reference's curvature stays within the reach of
+/// the profile's curved edge (`v kappa^2` at most [`CURVED_EDGE_REACH`]
+/// everywhere, `v` = [`spread_variance`]); [`shortest_element`] (or
+/// `shortest`, the longer) elsewhere.
+///
+/// Why: with the blurred curvature (`band/blurred_curvature.rs`) no
+/// settle grows an oscillation, and the refinement's rule, which counts
+/// the settles' amplification of noise and of shape errors
+/// (`fit/refine.rs`), decides whether the image holds shorter elements'
+/// detail: a star's bays of 14 px radius under a 4 px blur do. A corner
+/// that no break declares is beyond the profile's expansion in `v
+/// kappa^2`: shorter elements there follow the model's error, not the
+/// image, and the blur's floor keeps them long.
+pub(super) fn shortest_pixel_edge(reference: &SplineCurve, blur: f64, shortest: f64) -> f64 {
+    let floor = shortest_element(blur).max(shortest);
+    let v = spread_variance(blur);
+    let length = reference.param_length();
+    let n = (length / CURVATURE_STEP).ceil().max(1.0) as usize;
+    let within = (0..=n).all(|i| {
+        let kappa = reference.frame(i as f64 * length / n as f64).curvature;
+        v * kappa * kappa <= CURVED_EDGE_REACH
+    });
+    if within {
+        shortest
+    } else {
+        floor
+    }
+}
+
+/// The largest `v kappa^2` of a curve whose pixel-edge stage may refine
+/// below [`shortest_element`] ([`shortest_pixel_edge`]): the curved edge's
+/// second-order terms (`virtual_image/pixel_edge.rs`) then move its half
+/// level by at most a tenth of the first-order shift (`5 v kappa^2 / 12`).
+const CURVED_EDGE_REACH: f64 = 0.24;
+/// Spacing of the curvature's samples along the reference's parameter,
+/// pixels.
+const CURVATURE_STEP: f64 = 0.5;
+
 /// How much the settles of a pixel-edge stage with elements `h` pixels long
 /// amplify the noise of the position, for an optical blur of `blur` pixels
 /// (a factor on the Gauss–Newton `sigma`, at least 1).
@@ -311,14 +352,29 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
 /// noise of `U` spreads about evenly over `k` up to `pi / h`: the factor is
 /// the RMS of `1 / (1 - g)` over `k` in `[0, pi / h]`.
 pub(super) fn settle_noise_gain(blur: f64, h: f64) -> f64 {
-    let v = spread_variance(blur);
-    let g = v * std::f64::consts::PI.powi(2) / (2.0 * h * h);
+    let g = shortest_wave(blur, h);
     // Simpson's rule on 16 intervals, over x = k h / pi.
-    let f = |x: f64| {
-        let gx = g * x * x;
-        (1.0 - gx * (-0.5 * gx).exp()).powi(-2)
-    };
+    let f = |x: f64| settle_amplification(g * x * x).powi(2);
     psf::simpson(0.0, 1.0, 16, f).sqrt()
+}
+
+/// How much the settles of a pixel-edge stage with elements `h` pixels long
+/// amplify an error of the shortest oscillation those elements describe
+/// (wavelength `2 h`), for an optical blur of `blur` pixels: `1 / (1 - g)`
+/// with the gain `g` of [`settle_noise_gain`] at `k = pi / h`. A shape
+/// the elements cannot follow leaves its error at about that scale.
+pub(super) fn settle_shape_gain(blur: f64, h: f64) -> f64 {
+    settle_amplification(shortest_wave(blur, h))
+}
+
+/// `v k^2 / 2` at `k = pi / h`.
+fn shortest_wave(blur: f64, h: f64) -> f64 {
+    spread_variance(blur) * std::f64::consts::PI.powi(2) / (2.0 * h * h)
+}
+
+/// `1 / (1 - g)` for `g = x exp(-x / 2)`, `x = v k^2 / 2`.
+fn settle_amplification(x: f64) -> f64 {
+    1.0 / (1.0 - x * (-0.5 * x).exp())
 }
 
 #[cfg(test)]
@@ -336,5 +392,63 @@ mod tests {
             assert_eq!(parabola_vertex(x, [1.0; 3]), None);
             assert_eq!(parabola_vertex(x, [1.0, f64::NAN, 1.0]), None);
         }
+    }
+
+    /// The shape gain is the settles' `1 / (1 - g)` at the elements'
+    /// shortest wave: 1 for long elements, `1 / (1 - exp(-1/2))` at
+    /// `shortest_element`, and at most `1 / (1 - 2 / e)` anywhere; the
+    /// noise gain, its RMS over the shorter waves, lies between 1 and it.
+    #[test]
+    fn settle_gains() {
+        for blur in [0.5, 1.0, 2.0, 4.0] {
+            let floor = shortest_element(blur);
+            let at_floor = settle_shape_gain(blur, floor);
+            assert!(
+                (at_floor - 1.0 / (1.0 - (-0.5f64).exp())).abs() < 1e-12,
+                "{at_floor}"
+            );
+            assert!((settle_shape_gain(blur, 1e4) - 1.0).abs() < 1e-6);
+            let cap = 1.0 / (1.0 - 2.0 / std::f64::consts::E);
+            for h in [0.3, 0.5, 0.7, 1.0, 1.5, 3.0].map(|f| f * floor) {
+                let (shape, noise) = (settle_shape_gain(blur, h), settle_noise_gain(blur, h));
+                assert!(shape >= 1.0 && shape <= cap + 1e-12, "{blur} {h}: {shape}");
+                assert!(noise >= 1.0 && noise <= cap + 1e-12, "{blur} {h}: {noise}");
+            }
+        }
+    }
+
+    /// Points of a closed curve: the polar `r(theta)` about the origin.
+    fn polar(r: impl Fn(f64) -> f64) -> SplineCurve {
+        let n = 720;
+        let pts: Vec<[f64; 2]> = (0..n)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / n as f64;
+                [r(t) * t.cos(), r(t) * t.sin()]
+            })
+            .collect();
+        SplineCurve::fit(&pts, true, 3, 2.0).unwrap()
+    }
+
+    /// A curve whose curvature stays within the curved edge's reach may
+    /// refine to the schedule's shortest elements; one with a corner the
+    /// blur rounds (a square with corners of 2 px radius) keeps the
+    /// blur's floor; without blur every curve may.
+    #[test]
+    fn shortest_pixel_edge_follows_the_curvature() {
+        // A star whose bays have a radius of curvature of about 14 px.
+        let star = polar(|t| 140.0 * (1.0 + 0.2 * (6.0 * t).cos()));
+        assert_eq!(shortest_pixel_edge(&star, 4.0, 5.0), 5.0);
+        // A square of side 200 px, corners rounded to 2 px (a superellipse
+        // of high order).
+        let square = polar(|t| {
+            let (c, s) = (t.cos().abs(), t.sin().abs());
+            100.0 / (c.powi(40) + s.powi(40)).powf(1.0 / 40.0)
+        });
+        assert_eq!(
+            shortest_pixel_edge(&square, 4.0, 5.0),
+            shortest_element(4.0)
+        );
+        assert_eq!(shortest_pixel_edge(&square, 4.0, 10.0), 10.0);
+        assert_eq!(shortest_pixel_edge(&square, 0.0, 5.0), 5.0);
     }
 }

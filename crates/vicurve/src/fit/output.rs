@@ -234,11 +234,7 @@ impl<'a> SigmaTerms<'a> {
         // The noise estimate misses the rounding to the image's gray-level
         // steps (`Correlation::estimate_noise`): the Gauss–Newton `sigma`
         // scales as the root of the noise variance.
-        let rounding = fin
-            .corr
-            .noise_var()
-            .filter(|v| *v > 0.0)
-            .map_or(1.0, |v| (sampler.rounding_variance() / v).max(1.0).sqrt());
+        let rounding = fin.corr.rounding_gain(sampler);
         let edge = match fin.profile {
             Profile::PixelEdge { blur } => Some(Some(blur)),
             Profile::Paper {

@@ -2,6 +2,7 @@
 //! same reference while the finer curve differs from the coarser one by
 //! more than the noise explains.
 
+use super::blur::{settle_noise_gain, settle_shape_gain};
 use super::run::{iterate_to_end, Run, RunLimits, RunLog};
 use super::{breaks, FitConfig, IterationRecord, RunKind};
 use crate::band::Band;
@@ -50,6 +51,15 @@ pub(super) struct RefineBand {
 /// sharp edge on the pixel grid do not, so refinement also stops when the
 /// change is not at least halved (RMS) from one halving to the next.
 ///
+/// A pushed profile (pixel edge or line) is followed by settles, which
+/// amplify both terms ([`super::blur`]): each fit's noise by
+/// `settle_noise_gain` of its elements, and the coarse curve's shape error,
+/// left at about the coarse elements' own scale, by `settle_shape_gain`.
+/// Refining then pays when the amplified `rep^2` exceeds the amplified
+/// noise increase; without settles both gains are 1 and the rule is the
+/// one above. (The shape error of elements too long for a blurred star's
+/// bays is small in one fit, and the settles make it a wiggle.)
+///
 /// Returns the fit kept and the iterations used.
 pub(super) fn refine(
     reference: &SplineCurve,
@@ -80,10 +90,10 @@ pub(super) fn refine(
     let speed = reference.arc_length() / length;
     corr.estimate_noise(&lambda, sampler);
     loop {
-        let h = corr.basis().element_length() / 2.0;
-        if h * speed < shortest * (1.0 - rounding) {
+        let coarse = corr.basis().element_length();
+        let Some(h) = finer_length(coarse, shortest / speed, rounding) else {
             break;
-        }
+        };
         let n_el = ((length / h).round() as usize).max(min_el);
         let basis = breaks::displacement_basis(reference, config.degree, n_el)?;
         let reusable = band.reuse
@@ -127,18 +137,40 @@ pub(super) fn refine(
             break;
         };
         fine.estimate_noise(&fine_lambda, sampler);
-        let (mut diff2, mut noise2) = (0.0, 0.0);
+        // The settles that follow a pushed profile amplify each fit's
+        // noise, the more the shorter its elements, and the coarse
+        // curve's shape error.
+        let settled = match band.profile {
+            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => Some(blur),
+            Profile::Paper { .. } => None,
+        };
+        let gain = |basis: &Basis| {
+            settled.map_or(1.0, |blur| {
+                settle_noise_gain(blur, basis.element_length() * speed)
+            })
+        };
+        // The noise estimate leaves out the rounding to the gray levels,
+        // which the settles amplify as they do noise.
+        let rounding = |c: &Correlation| settled.map_or(1.0, |_| c.rounding_gain(sampler));
+        let (rf, rc) = (rounding(&fine), rounding(&corr));
+        let (gf, gc) = (gain(fine.basis()), gain(corr.basis()));
+        let (mut diff2, mut noise2, mut settled_noise2) = (0.0, 0.0, 0.0);
         for &u in &params {
             let d = displacement(fine.basis(), &fine_lambda, u)
                 - displacement(corr.basis(), &lambda, u);
             diff2 += d * d;
-            let sf = fine.position_sigma(u);
-            let sc = corr.position_sigma(u);
+            let (sf, sc) = (rf * fine.position_sigma(u), rc * corr.position_sigma(u));
             noise2 += sf * sf - sc * sc;
+            settled_noise2 += (gf * sf).powi(2) - (gc * sc).powi(2);
         }
+        // The coarse curve's shape error, as the settles will leave it.
+        let shape_gain = settled.map_or(1.0, |blur| {
+            settle_shape_gain(blur, corr.basis().element_length() * speed)
+        });
+        let shape2 = shape_gain * shape_gain * (diff2 - noise2.max(0.0));
         // Significant, and still converging like a shape error (a change
         // that does not shrink is noise or aliasing being chased).
-        if diff2 <= 2.0 * noise2.max(0.0) || diff2 >= 0.25 * previous_diff2 {
+        if shape2 <= settled_noise2.max(0.0) || diff2 >= 0.25 * previous_diff2 {
             break;
         }
         previous_diff2 = diff2;
@@ -147,6 +179,32 @@ pub(super) fn refine(
     Ok((Fitted { corr, lambda, step }, iterations))
 }
 
+/// The next element length (parameter units) after `coarse`, down to
+/// `shortest`: half of it, or `shortest` itself where half would fall
+/// under it (by more than the `rounding` of element counts) and
+/// `shortest` is still at most [`LAST_STEP`] of `coarse`; `None` when no
+/// finer elements are left to try.
+///
+/// Why the last step: a stage whose first elements are not a power of two
+/// above its shortest (the pixel-edge stage starts from the blur's
+/// `shortest_element`, 8.9 px under a 4 px blur, and may go down to 5 px)
+/// would otherwise stop a halving short of what it may try.
+fn finer_length(coarse: f64, shortest: f64, rounding: f64) -> Option<f64> {
+    let half = 0.5 * coarse;
+    if half >= shortest * (1.0 - rounding) {
+        Some(half)
+    } else if shortest <= LAST_STEP * coarse {
+        Some(shortest)
+    } else {
+        None
+    }
+}
+
+/// The largest ratio of a last, shorter than halving, refinement step
+/// ([`finer_length`]): closer lengths differ by little more than the
+/// rounding of their element counts.
+const LAST_STEP: f64 = 0.75;
+
 /// `U(u)` of a displacement basis and coefficients, pixels.
 pub(super) fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
     let mut v = [0.0; MAX_DEGREE + 1];
@@ -154,4 +212,32 @@ pub(super) fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
     (0..=basis.degree())
         .map(|k| lambda[basis.index(first, k)] * v[k])
         .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::finer_length;
+
+    /// Halving while half stays above the shortest (to the rounding),
+    /// then one last step onto the shortest when it is at most
+    /// `LAST_STEP` of the current length, then nothing.
+    #[test]
+    fn finer_lengths_halve_then_land_on_the_shortest() {
+        let steps = |mut h: f64, shortest: f64| {
+            let mut out = vec![h];
+            while let Some(next) = finer_length(h, shortest, 0.002) {
+                out.push(next);
+                h = next;
+            }
+            out
+        };
+        assert_eq!(steps(40.0, 5.0), [40.0, 20.0, 10.0, 5.0]);
+        // Half of 10.04 is within the rounding of 5.
+        assert_eq!(steps(10.04, 5.0), [10.04, 5.02]);
+        assert_eq!(steps(8.9, 5.0), [8.9, 5.0]);
+        assert_eq!(steps(9.94, 5.0), [9.94, 5.0]);
+        // 5 is more than 0.75 of 6.5: no step worth its fit.
+        assert_eq!(steps(6.5, 5.0), [6.5]);
+        assert_eq!(steps(5.0, 5.0), [5.0]);
+    }
 }

@@ -6,8 +6,8 @@
 //! frame's band is kept for the next frame.
 
 use super::blur::{
-    estimate_spread, matched_band, pixel_edge_band_for, shortest_element, BAND_MISMATCH,
-    MIN_EDGE_FIT_QUALITY,
+    estimate_spread, matched_band, pixel_edge_band_for, shortest_element, shortest_pixel_edge,
+    BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
 };
 use super::loops;
 use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
@@ -332,17 +332,18 @@ impl<'s> Schedule<'s> {
         {
             let good = e.fit_quality >= MIN_EDGE_FIT_QUALITY;
             if good && self.config.kind == Kind::Silhouette {
-                // Starting from the elements the last stage chose, and
+                // Starting from the elements the last stage chose, no
+                // shorter than the blur resolves (`shortest_element`), and
                 // refining further when that stage could (its sine profile
                 // may have stopped on aliasing, which the pixel edge does
-                // not have).
-                // No shorter than the blur resolves (`shortest_element`).
+                // not have), below that where the curve's curvature is
+                // within the profile's reach (`shortest_pixel_edge`).
                 let blur = optical_blur(e.sigma);
                 let floor = shortest_element(blur);
                 let elements = match stage.elements {
                     Elements::Auto { shortest, .. } => Elements::Auto {
                         longest: chosen.max(floor),
-                        shortest: shortest.max(floor),
+                        shortest: shortest_pixel_edge(&self.current, blur, shortest),
                     },
                     _ => Elements::Length(chosen.max(floor)),
                 };
