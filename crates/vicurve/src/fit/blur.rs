@@ -396,8 +396,8 @@ mod tests {
 
     /// The shape gain is the settles' `1 / (1 - g)` at the elements'
     /// shortest wave: 1 for long elements, `1 / (1 - exp(-1/2))` at
-    /// `shortest_element`, and at most `1 / (1 - 2 / e)` anywhere; the
-    /// noise gain, its RMS over the shorter waves, lies between 1 and it.
+    /// `shortest_element`, and at most `1 / (1 - 2 / e)` anywhere; so is
+    /// the noise gain, its RMS over the longer waves.
     #[test]
     fn settle_gains() {
         for blur in [0.5, 1.0, 2.0, 4.0] {
@@ -431,15 +431,15 @@ mod tests {
 
     /// A curve whose curvature stays within the curved edge's reach may
     /// refine to the schedule's shortest elements; one with a corner the
-    /// blur rounds (a square with corners of 2 px radius) keeps the
-    /// blur's floor; without blur every curve may.
+    /// blur rounds (a square whose corners have a radius of a few pixels)
+    /// keeps the blur's floor; without blur every curve may.
     #[test]
     fn shortest_pixel_edge_follows_the_curvature() {
         // A star whose bays have a radius of curvature of about 14 px.
         let star = polar(|t| 140.0 * (1.0 + 0.2 * (6.0 * t).cos()));
         assert_eq!(shortest_pixel_edge(&star, 4.0, 5.0), 5.0);
-        // A square of side 200 px, corners rounded to 2 px (a superellipse
-        // of high order).
+        // A square of side 200 px, its corners rounded over a few pixels
+        // (a superellipse of high order).
         let square = polar(|t| {
             let (c, s) = (t.cos().abs(), t.sin().abs());
             100.0 / (c.powi(40) + s.powi(40)).powf(1.0 / 40.0)
