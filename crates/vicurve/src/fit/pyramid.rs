@@ -241,6 +241,7 @@ impl Schedule<'_> {
         let mut sub = Schedule::new(&self.binned[level].1, start, &config, None, None).ok()?;
         // The element floor of the schedule it stands in.
         sub.min_el = self.min_el;
+        sub.coarse = true;
         sub.run().ok()?;
         if sub.last.is_none() || matches!(sub.outcome, Outcome::Diverged { .. }) {
             return None;

@@ -137,6 +137,11 @@ pub(super) struct Schedule<'s> {
     /// Whether the stage running is the probe ([`super::probe`]), which
     /// stops at its first new reference.
     pub probing: bool,
+    /// Whether this schedule is a coarse stage run on a binned image
+    /// ([`super::pyramid`]): its result is only the next stage's reference,
+    /// and its residuals where the curve has not reached the edge yet are
+    /// not clutter, so it runs no robust reweighting.
+    pub coarse: bool,
     /// The image binned for coarse stages, by binning ([`super::pyramid`]),
     /// made on first use.
     pub binned: Vec<(usize, Sampler)>,
@@ -209,6 +214,7 @@ impl<'s> Schedule<'s> {
             matched_added: tracked.is_some(),
             pixel_edge: tracked.map(|t| t.profile()),
             probing: false,
+            coarse: false,
             binned: Vec::new(),
             binned_done: false,
             config,

@@ -839,7 +839,7 @@ impl Schedule<'_> {
         if auto_elements {
             st.fixed_elements = Some(corr.basis().n_elements());
         }
-        if o == Outcome::Converged && st.cluttered != Some(false) {
+        if o == Outcome::Converged && st.cluttered != Some(false) && !self.coarse {
             let fit = RobustFit {
                 corr: &mut corr,
                 lambda: &mut lambda,
