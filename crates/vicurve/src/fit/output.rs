@@ -39,6 +39,11 @@ pub(super) struct Final {
     pub corr: Correlation,
     /// Its coefficients, pixels.
     pub lambda: Vec<f64>,
+    /// The shape error of its elements, when its refinement measured one
+    /// (RMS over the curve, pixels): a floor of the model term of every
+    /// sample's `sigma` (not a flagged misfit: where along the curve it
+    /// lies is not known).
+    pub shape_error: Option<f64>,
 }
 
 /// What [`Final::samples`] delivers.
@@ -118,13 +123,16 @@ impl Final {
                 let f = curve.frame(s[i]);
                 let (sigma_noise, misfit) = terms.at(i, params[i]);
                 let (misfit, lost) = terms.edge_checked(params[i], sigma_noise, misfit);
+                // The elements' shape error is spread over the curve: it
+                // counts in `sigma`, not as a local misfit.
+                let model = misfit.max(self.shape_error.unwrap_or(0.0));
                 let sample = Sample {
                     s: s[i],
                     x: q[0],
                     y: q[1],
                     nx: f.normal[0],
                     ny: f.normal[1],
-                    sigma: sigma_noise.hypot(misfit),
+                    sigma: sigma_noise.hypot(model),
                     sigma_noise,
                     misfit: misfit > sigma_noise,
                     weight: weights.at(params[i]),

@@ -69,7 +69,7 @@ pub(super) fn refine(
     config: &FitConfig,
     band: RefineBand,
     history: &mut Vec<IterationRecord>,
-) -> Result<(Fitted, usize)> {
+) -> Result<(Fitted, usize, Option<f64>)> {
     let Fitted {
         mut corr,
         mut lambda,
@@ -81,6 +81,7 @@ pub(super) fn refine(
     let params = reference.sample_params((length.ceil() as usize).max(8));
     let mut iterations = 0;
     let mut previous_diff2 = f64::INFINITY;
+    let mut shape_error = None;
     // Halvings of the first elements reach `shortest` up to the rounding of
     // their count (`Stage::element_count`): elements `longest` long
     // halve down to `shortest` whether that count rounded up or down.
@@ -170,13 +171,54 @@ pub(super) fn refine(
         let shape2 = shape_gain * shape_gain * (diff2 - noise2.max(0.0));
         // Significant, and still converging like a shape error (a change
         // that does not shrink is noise or aliasing being chased).
-        if shape2 <= settled_noise2.max(0.0) || diff2 >= 0.25 * previous_diff2 {
+        if diff2 >= 0.25 * previous_diff2 {
+            break;
+        }
+        if shape2 <= settled_noise2.max(0.0) {
+            // On a sharp edge the finer fit may chase the pixel grid's
+            // aliasing instead: the difference is then not the kept
+            // elements' error. A blur of a pixel leaves no aliasing.
+            if settled.is_some_and(|blur| blur >= ALIAS_FREE_BLUR) {
+                let extra = fine.n_unknowns().saturating_sub(corr.n_unknowns()).max(1);
+                shape_error = kept_shape_error(diff2, noise2, extra, shape_gain, params.len());
+            }
             break;
         }
         previous_diff2 = diff2;
         (corr, lambda, step) = (fine, fine_lambda, fs);
     }
-    Ok((Fitted { corr, lambda, step }, iterations))
+    Ok((Fitted { corr, lambda, step }, iterations, shape_error))
+}
+
+/// The blur (pixels) from which a rejected refinement's difference is
+/// taken for the kept elements' shape error ([`kept_shape_error`]): a
+/// Gaussian blur of `b` pixels leaves `exp(-2 pi^2 b^2)` of the pixel
+/// grid's aliasing, nothing at 1 px.
+const ALIAS_FREE_BLUR: f64 = 1.0;
+
+/// The shape error of the elements a refinement kept (RMS over the curve,
+/// pixels, amplified by the settles' `shape_gain`), from the difference
+/// `diff2` to the finer fit it rejected (a sum over `n` points) and the
+/// noise's share of it `noise2`; `None` where the difference is within
+/// what `extra` more unknowns' noise makes of it (two standard deviations
+/// of a chi-square of `extra` degrees of freedom, `noise2 sqrt(2 /
+/// extra)`), which is what a curve the elements follow gives.
+///
+/// Why: a refinement is rejected when the shape error it would remove
+/// costs less than the noise it would add, but that error stays in the
+/// result, where the noise-only `sigma` does not count it (a blurred sine
+/// edge on elements of 40 px: its scatter 1.5 times its `sigma`).
+fn kept_shape_error(
+    diff2: f64,
+    noise2: f64,
+    extra: usize,
+    shape_gain: f64,
+    n: usize,
+) -> Option<f64> {
+    let noise2 = noise2.max(0.0);
+    let excess = diff2 - noise2;
+    (excess > 2.0 * noise2 * (2.0 / extra as f64).sqrt() && n > 0)
+        .then(|| shape_gain * (excess / n as f64).sqrt())
 }
 
 /// The next element length (parameter units) after `coarse`, down to
@@ -216,7 +258,24 @@ pub(super) fn displacement(basis: &Basis, lambda: &[f64], u: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::finer_length;
+    use super::{finer_length, kept_shape_error};
+
+    /// A difference within two standard deviations of what the extra
+    /// unknowns' noise makes is no shape error; beyond, its excess over
+    /// the noise, RMS over the points, amplified by the settles' gain.
+    #[test]
+    fn kept_shape_error_is_the_excess_over_the_noise() {
+        let (noise2, extra, n) = (0.2, 32, 1000);
+        let bound = noise2 * (1.0 + 2.0 * (2.0 / extra as f64).sqrt());
+        assert_eq!(kept_shape_error(0.99 * bound, noise2, extra, 1.0, n), None);
+        assert_eq!(kept_shape_error(0.1, noise2, extra, 2.0, n), None);
+        let e = kept_shape_error(noise2 + 0.4, noise2, extra, 2.0, n).unwrap();
+        assert!((e - 2.0 * (0.4f64 / 1000.0).sqrt()).abs() < 1e-12, "{e}");
+        // A negative noise term (a coarser fit noisier than the finer) is
+        // no noise.
+        let e = kept_shape_error(0.4, -0.1, extra, 1.0, n).unwrap();
+        assert!((e - (0.4f64 / 1000.0).sqrt()).abs() < 1e-12, "{e}");
+    }
 
     /// Halving while half stays above the shortest (to the rounding),
     /// then one last step onto the shortest when it is at most

@@ -105,6 +105,9 @@ pub(super) struct StageState {
     blur_confirmed: bool,
     /// Once the last stage has chosen its elements, re-runs keep them.
     fixed_elements: Option<usize>,
+    /// The shape error of those elements, when the refinement measured one
+    /// (`refine::kept_shape_error`), pixels RMS.
+    shape_error: Option<f64>,
     /// Settling re-references so far.
     settles: usize,
     /// Decided once per stage, on its first converged run (the runs after
@@ -228,6 +231,7 @@ impl Schedule<'_> {
             blur_updates: 0,
             blur_confirmed: false,
             fixed_elements: None,
+            shape_error: None,
             settles: 0,
             levels_tested: false,
             cluttered: None,
@@ -820,7 +824,7 @@ impl Schedule<'_> {
         if let (Elements::Auto { shortest, .. }, Some(step), None) =
             (st.stage.elements, st.step, st.fixed_elements)
         {
-            let (refined, used) = refine(
+            let (refined, used, shape_error) = refine(
                 &self.current,
                 Fitted { corr, lambda, step },
                 shortest,
@@ -835,6 +839,7 @@ impl Schedule<'_> {
             )?;
             (corr, lambda, st.step) = (refined.corr, refined.lambda, Some(refined.step));
             st.iterations += used;
+            st.shape_error = shape_error;
         }
         if auto_elements {
             st.fixed_elements = Some(corr.basis().n_elements());
@@ -900,6 +905,7 @@ impl Schedule<'_> {
             },
             corr,
             lambda,
+            shape_error: st.shape_error,
         });
         Ok(Next::Exit(Flow::Completed))
     }
