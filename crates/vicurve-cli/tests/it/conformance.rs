@@ -346,6 +346,9 @@ fn sigma_counts_the_shape_error_of_kept_elements() {
         let rows = read_rows(&csv);
         let row = rows.iter().find(|r| r["id"] == id).unwrap();
         let ratio: f64 = row["scatter_over_sigma"].parse().unwrap();
-        assert!((0.7..=1.4).contains(&ratio), "{id}: scatter / sigma {ratio}");
+        assert!(
+            (0.7..=1.4).contains(&ratio),
+            "{id}: scatter / sigma {ratio}"
+        );
     }
 }

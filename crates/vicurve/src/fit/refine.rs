@@ -60,7 +60,8 @@ pub(super) struct RefineBand {
 /// one above. (The shape error of elements too long for a blurred star's
 /// bays is small in one fit, and the settles make it a wiggle.)
 ///
-/// Returns the fit kept and the iterations used.
+/// Returns the fit kept, the iterations used, and the kept elements' shape
+/// error when a rejected refinement measured one ([`kept_shape_error`]).
 pub(super) fn refine(
     reference: &SplineCurve,
     fit: Fitted,
