@@ -192,6 +192,44 @@ fn centroid(csv: &str) -> [f64; 2] {
     [mean("x"), mean("y")]
 }
 
+/// Run the sweep's case `id` of `set` into `dir` (with `--samples` when
+/// `samples`), and return the rows of its CSV.
+fn run_case(
+    dir: &std::path::Path,
+    set: &str,
+    id: &str,
+    samples: bool,
+) -> Vec<HashMap<String, String>> {
+    let out_dir = dir.display().to_string();
+    let mut args = vec![
+        "bench",
+        "conformance",
+        "--out",
+        &out_dir,
+        "--set",
+        set,
+        "--filter",
+        id,
+    ];
+    if samples {
+        args.push("--samples");
+    }
+    ok(&vicurve(&args));
+    read_rows(&std::fs::read_to_string(dir.join("conformance.csv")).unwrap())
+}
+
+/// The file of case `id` that `--samples` wrote into `dir` with extension
+/// `ext` (`csv`, `png`, `start.csv`, `truth.json`), as an argument.
+fn sample_file(dir: &std::path::Path, id: &str, ext: &str) -> String {
+    let stem = dir.join("samples").join(id.replace('/', "_"));
+    format!("{}.{ext}", stem.display())
+}
+
+/// The JSON file at `path`.
+fn read_json(path: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// `--samples` writes, for each case, its samples, its image, its
 /// start's points and its truth: `vicurve measure` on those measures the
 /// same curve again (the start is the circle's points 1 px apart, not the
@@ -202,20 +240,8 @@ fn centroid(csv: &str) -> [f64; 2] {
 fn conformance_samples_measure_again_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let id = "disc/blur1/noise1/8bit/dark/circle-10pct";
-    let out_dir = dir.path().display().to_string();
-    ok(&vicurve(&[
-        "bench",
-        "conformance",
-        "--out",
-        &out_dir,
-        "--set",
-        "ci",
-        "--filter",
-        id,
-        "--samples",
-    ]));
-    let stem = dir.path().join("samples").join(id.replace('/', "_"));
-    let file = |ext: &str| format!("{}.{ext}", stem.display());
+    let rows = run_case(dir.path(), "ci", id, true);
+    let file = |ext: &str| sample_file(dir.path(), id, ext);
     let samples = std::fs::read_to_string(file("csv")).unwrap();
     let points = file("points.csv");
     ok(&vicurve(&[
@@ -241,10 +267,7 @@ fn conformance_samples_measure_again_from_the_command_line() {
         "--json",
         &stats,
     ]));
-    let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
-    let csv = std::fs::read_to_string(dir.path().join("conformance.csv")).unwrap();
-    let rows = read_rows(&csv);
+    let stats = read_json(&stats);
     let row = rows.iter().find(|r| r["id"] == id).unwrap();
     for key in ["bias", "scatter"] {
         let (got, want) = (
@@ -268,22 +291,9 @@ fn conformance_samples_measure_again_from_the_command_line() {
 fn a_binned_stage_takes_no_lobe_for_clutter() {
     let dir = tempfile::tempdir().unwrap();
     let id = "far-star-l6-a0.20/blur1.5/noise1/8bit/bright/circle-0.85r/paper-stages";
-    let out_dir = dir.path().display().to_string();
-    ok(&vicurve(&[
-        "bench",
-        "conformance",
-        "--out",
-        &out_dir,
-        "--set",
-        "full",
-        "--filter",
-        id,
-        "--samples",
-    ]));
-    let stem = dir.path().join("samples").join(id.replace('/', "_"));
-    let file = |ext: &str| format!("{}.{ext}", stem.display());
-    let truth: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(file("truth.json")).unwrap()).unwrap();
+    run_case(dir.path(), "full", id, true);
+    let file = |ext: &str| sample_file(dir.path(), id, ext);
+    let truth = read_json(&file("truth.json"));
     let (cx, cy) = (
         truth["shape"]["cx"].as_f64().unwrap(),
         truth["shape"]["cy"].as_f64().unwrap(),
@@ -299,8 +309,7 @@ fn a_binned_stage_takes_no_lobe_for_clutter() {
         "--out",
         &result,
     ]));
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&result).unwrap()).unwrap();
+    let r = read_json(&result);
     assert_eq!(r["outcome"]["status"], "converged");
     let stages = r["stages"].as_array().unwrap();
     let binnings: Vec<u64> = stages
@@ -331,19 +340,7 @@ fn sigma_counts_the_shape_error_of_kept_elements() {
         "star-a0.2/blur4/noise1/8bit/dark/circle-10pct",
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let out_dir = dir.path().display().to_string();
-        ok(&vicurve(&[
-            "bench",
-            "conformance",
-            "--out",
-            &out_dir,
-            "--set",
-            "full",
-            "--filter",
-            id,
-        ]));
-        let csv = std::fs::read_to_string(dir.path().join("conformance.csv")).unwrap();
-        let rows = read_rows(&csv);
+        let rows = run_case(dir.path(), "full", id, false);
         let row = rows.iter().find(|r| r["id"] == id).unwrap();
         let ratio: f64 = row["scatter_over_sigma"].parse().unwrap();
         assert!(

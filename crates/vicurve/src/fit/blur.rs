@@ -282,20 +282,22 @@ pub(crate) fn pixel_edge_band_for(
 /// its gain is 1/2, and above a gain of 1 the settles grow noise into an
 /// oscillation of the curve. The profile takes the curvature averaged
 /// over the blur (`band/blurred_curvature.rs`), whose gain stays under
-/// `2 / e`; the stage's elements are bounded by [`shortest_element`].
+/// `2 / e`; the stage's elements start from [`shortest_element`].
 pub(super) fn resolved_element(blur: f64) -> f64 {
     std::f64::consts::PI * spread_variance(blur).sqrt()
 }
 
-/// The shortest elements of a pixel-edge stage under an optical blur of
-/// `blur` pixels: `1 / sqrt 2` of [`resolved_element`], where the shortest
-/// oscillation's gain through the blurred curvature
-/// (`band/blurred_curvature.rs`) is `exp(-1/2)` = 0.61 and the blur keeps
-/// 37 % of it in the image. The profile's curvature averaged over the blur
-/// keeps every settle's gain under `2 / e`, so shorter elements than
-/// [`resolved_element`] no longer grow an oscillation; the refinement's
-/// stop rule decides whether the image holds their detail (a blurred
-/// star's bays of 14 px radius need them).
+/// The blur's floor on the elements of a pixel-edge stage under an optical
+/// blur of `blur` pixels, where the stage starts: `1 / sqrt 2` of
+/// [`resolved_element`], where the shortest oscillation's gain through the
+/// blurred curvature (`band/blurred_curvature.rs`) is `exp(-1/2)` = 0.61
+/// and the blur keeps 37 % of it in the image. The profile's curvature
+/// averaged over the blur keeps every settle's gain under `2 / e`, so
+/// shorter elements grow no oscillation; the stage refines below the floor
+/// where [`shortest_pixel_edge`] allows it, and the refinement's rule
+/// decides whether the image holds their detail (a blurred star's bays of
+/// 14 px radius do). Lines keep it, and the output's oscillation check
+/// looks at curves whose elements are shorter.
 pub(super) fn shortest_element(blur: f64) -> f64 {
     resolved_element(blur) * std::f64::consts::FRAC_1_SQRT_2
 }
