@@ -35,6 +35,14 @@ use std::time::Instant;
 
 /// Re-references allowed within one stage before it is declared stuck.
 const MAX_REREFERENCES: usize = 100;
+/// Re-references in a row that did not lower the stage's residual by
+/// [`STALL_GAIN`] (relative) below the lowest of its earlier ones, after
+/// which a stage that chooses its elements re-references no more: it
+/// cycles between references without approaching the edge (see
+/// [`StageState::lowest_residual`]).
+const MAX_STALLED: usize = 8;
+/// See [`MAX_STALLED`].
+const STALL_GAIN: f64 = 0.01;
 /// The last stage of the default schedule re-references until its
 /// displacement is under this, pixels (see [`StageState::settles`]): a
 /// settling re-reference moves the result by a few percent of the
@@ -96,6 +104,17 @@ pub(super) struct StageState {
     iterations: usize,
     /// New references so far.
     rereferences: usize,
+    /// The lowest residual RMS (gray levels) a run ended with before a new
+    /// reference, and the re-references since that have not lowered it
+    /// by [`STALL_GAIN`]: elements too long for a fine shape under a narrow
+    /// band (a star's bays of 10 px radius on 40 px elements at R = 2)
+    /// alternate between two references 8 px apart, the residual rising,
+    /// until [`MAX_REREFERENCES`] (200 iterations, most of the fit's
+    /// time); after [`MAX_STALLED`] the run converges on its reference and
+    /// the refinement of the elements follows, as after that limit.
+    lowest_residual: f64,
+    /// See [`StageState::lowest_residual`].
+    stalled: usize,
     /// The last successful step.
     step: Option<Step>,
     /// Runs with a refitted blur so far.
@@ -227,6 +246,8 @@ impl Schedule<'_> {
             started: Instant::now(),
             iterations: 0,
             rereferences: 0,
+            lowest_residual: f64::INFINITY,
+            stalled: 0,
             step: None,
             blur_updates: 0,
             blur_confirmed: false,
@@ -375,8 +396,13 @@ impl Schedule<'_> {
         } else {
             self.config.tolerance
         };
+        // A stage that chooses its elements stops cycling: its refinement
+        // follows. A coarse stage's walk towards a far edge keeps going
+        // (its residual rises and falls as the band finds the edge).
+        let stalled =
+            st.stalled >= MAX_STALLED && matches!(st.stage.elements, Elements::Auto { .. });
         // A windowed band serves displacements within its margin.
-        let rereference = if st.rereferences >= MAX_REREFERENCES {
+        let rereference = if st.rereferences >= MAX_REREFERENCES || stalled {
             f64::INFINITY
         } else if windowed {
             corr.band().margin()
@@ -718,6 +744,14 @@ impl Schedule<'_> {
         lambda: &[f64],
     ) -> Result<Next> {
         let basis = system.corr.basis();
+        if let Some(last) = st.history.last() {
+            if last.residual_rms < st.lowest_residual * (1.0 - STALL_GAIN) {
+                st.lowest_residual = last.residual_rms;
+                st.stalled = 0;
+            } else {
+                st.stalled += 1;
+            }
+        }
         match self.move_reference(st, basis, lambda, reference_spacing(basis))? {
             None => Ok(Next::Again),
             Some(looped) => {

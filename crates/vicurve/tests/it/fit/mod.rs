@@ -18,6 +18,7 @@ mod robust;
 mod run;
 mod sharp;
 mod sigma;
+mod stage;
 mod track;
 mod uncertainty;
 
