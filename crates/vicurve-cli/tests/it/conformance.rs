@@ -12,10 +12,6 @@ use std::collections::HashMap;
 /// runner reports them (docs/conformance.md groups them by cause). Only ever remove entries (the fixes of issue 18
 /// land); a new failure is a regression, not an entry.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
-    (
-        "star-a0.2/blur4/noise0/8bit/bright/circle-0.85r",
-        "scatter/sigma 3.50",
-    ),
     // Since the pixel-edge profile models a corner's blurred wedge
     // (`virtual_image::corner`) these two noiseless pentagons fail by
     // little: the first's largest error (2.3e-3 px, at a corner) is

@@ -369,6 +369,27 @@ pub(super) fn settle_shape_gain(blur: f64, h: f64) -> f64 {
     settle_amplification(shortest_wave(blur, h))
 }
 
+/// How much one settle amplifies the noise of the position (the factor of
+/// [`settle_noise_gain`] after the first settle only): the RMS of `1 + g`
+/// over `k` in `[0, pi / h]`. A fit on a reference of its own (a settle of
+/// the fit before it, `fit/refine.rs`) holds its noise amplified so.
+pub(super) fn one_settle_noise_gain(blur: f64, h: f64) -> f64 {
+    let g = shortest_wave(blur, h);
+    let f = |x: f64| (1.0 + gain_of(g * x * x)).powi(2);
+    psf::simpson(0.0, 1.0, 16, f).sqrt()
+}
+
+/// How much one settle amplifies an error of the shortest oscillation of
+/// elements `h` pixels long: `1 + g` (see [`settle_shape_gain`]).
+pub(super) fn one_settle_shape_gain(blur: f64, h: f64) -> f64 {
+    1.0 + gain_of(shortest_wave(blur, h))
+}
+
+/// The settle's gain `g = x exp(-x / 2)` at `x = v k^2 / 2`.
+fn gain_of(x: f64) -> f64 {
+    x * (-0.5 * x).exp()
+}
+
 /// `v k^2 / 2` at `k = pi / h`.
 fn shortest_wave(blur: f64, h: f64) -> f64 {
     spread_variance(blur) * std::f64::consts::PI.powi(2) / (2.0 * h * h)
@@ -376,7 +397,7 @@ fn shortest_wave(blur: f64, h: f64) -> f64 {
 
 /// `1 / (1 - g)` for `g = x exp(-x / 2)`, `x = v k^2 / 2`.
 fn settle_amplification(x: f64) -> f64 {
-    1.0 / (1.0 - x * (-0.5 * x).exp())
+    1.0 / (1.0 - gain_of(x))
 }
 
 #[cfg(test)]
@@ -415,6 +436,20 @@ mod tests {
                 let (shape, noise) = (settle_shape_gain(blur, h), settle_noise_gain(blur, h));
                 assert!(shape >= 1.0 && shape <= cap + 1e-12, "{blur} {h}: {shape}");
                 assert!(noise >= 1.0 && noise <= cap + 1e-12, "{blur} {h}: {noise}");
+                // One settle amplifies by at least 1 (long elements) and
+                // by no more than all of them.
+                let (one_shape, one_noise) = (
+                    one_settle_shape_gain(blur, h),
+                    one_settle_noise_gain(blur, h),
+                );
+                assert!(
+                    one_shape >= 1.0 && one_shape <= shape + 1e-12,
+                    "{blur} {h}: {one_shape}"
+                );
+                assert!(
+                    one_noise >= 1.0 && one_noise <= noise + 1e-12,
+                    "{blur} {h}: {one_noise}"
+                );
             }
         }
     }

@@ -858,7 +858,7 @@ impl Schedule<'_> {
         if let (Elements::Auto { shortest, .. }, Some(step), None) =
             (st.stage.elements, st.step, st.fixed_elements)
         {
-            let (refined, used, shape_error) = refine(
+            let refined = refine(
                 &self.current,
                 Fitted { corr, lambda, step },
                 shortest,
@@ -871,9 +871,13 @@ impl Schedule<'_> {
                 },
                 &mut st.history,
             )?;
-            (corr, lambda, st.step) = (refined.corr, refined.lambda, Some(refined.step));
-            st.iterations += used;
-            st.shape_error = shape_error;
+            let fit = refined.fit;
+            (corr, lambda, st.step) = (fit.corr, fit.lambda, Some(fit.step));
+            st.iterations += refined.iterations;
+            st.shape_error = refined.shape_error;
+            if let Some(reference) = refined.reference {
+                self.current = reference;
+            }
         }
         if auto_elements {
             st.fixed_elements = Some(corr.basis().n_elements());

@@ -14,6 +14,7 @@ mod paper_disc;
 mod polarity;
 mod probe;
 mod pyramid;
+mod refine;
 mod robust;
 mod run;
 mod sharp;
