@@ -346,6 +346,18 @@ impl SplineCurve {
         frame_from(p, d1, d2)
     }
 
+    /// The largest `|kappa|` (1/pixels) over the curve, sampled at most
+    /// `step` apart along the parameter, both ends included (a closed
+    /// curve's meet). A peak between samples is missed by up to its
+    /// variation over `step`.
+    pub fn largest_curvature(&self, step: f64) -> f64 {
+        let l = self.param_length();
+        let n = (l / step).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|i| self.frame(i as f64 * l / n as f64).curvature.abs())
+            .fold(0.0, f64::max)
+    }
+
     /// Arc length, pixels (5-point Gauss–Legendre on each element: exact to
     /// rounding for the smooth curves handled here).
     pub fn arc_length(&self) -> f64 {

@@ -320,14 +320,8 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
 /// image, and the blur's floor keeps them long.
 pub(super) fn shortest_pixel_edge(reference: &SplineCurve, blur: f64, shortest: f64) -> f64 {
     let floor = shortest_element(blur).max(shortest);
-    let v = spread_variance(blur);
-    let length = reference.param_length();
-    let n = (length / CURVATURE_STEP).ceil().max(1.0) as usize;
-    let within = (0..=n).all(|i| {
-        let kappa = reference.frame(i as f64 * length / n as f64).curvature;
-        v * kappa * kappa <= CURVED_EDGE_REACH
-    });
-    if within {
+    let kappa = reference.largest_curvature(CURVATURE_STEP);
+    if spread_variance(blur) * kappa * kappa <= CURVED_EDGE_REACH {
         shortest
     } else {
         floor

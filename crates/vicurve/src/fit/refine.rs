@@ -207,20 +207,18 @@ pub(super) fn refine(
         let (mut diff2, mut noise2, mut settled_noise2) = (0.0, 0.0, 0.0);
         // The same fraction of each reference's parameter (all follow the
         // arc length of about the same curve).
-        let on = |r: &Option<SplineCurve>, u: f64| {
-            r.as_ref().map_or(u, |r| u * r.param_length() / length)
-        };
-        let base_reference = baseline.as_ref().and_then(|b| b.reference.clone());
+        let base_reference = baseline.as_ref().and_then(|b| b.reference.as_ref());
+        let scale = |r: Option<&SplineCurve>| r.map_or(1.0, |r| r.param_length() / length);
+        let (kf, kc) = (scale(fine.reference.as_ref()), scale(base_reference));
         for &u in &params {
-            let (uf, uc) = (on(&fine.reference, u), on(&base_reference, u));
-            let d = match (&fine.reference, &base_reference) {
+            let (uf, uc) = (u * kf, u * kc);
+            let d = match (&fine.reference, base_reference) {
                 (Some(fine_ref), Some(base_ref)) => {
-                    let (pf, pc) = (
-                        displaced(fine_ref, fine.corr.basis(), &fine.lambda, uf),
-                        displaced(base_ref, coarse_fit.0.basis(), coarse_fit.1, uc),
-                    );
-                    let n = base_ref.frame(uc).normal;
-                    (pf[0] - pc[0]) * n[0] + (pf[1] - pc[1]) * n[1]
+                    let pf = displaced(fine_ref, fine.corr.basis(), &fine.lambda, uf);
+                    let f = base_ref.frame(uc);
+                    let dc = displacement(coarse_fit.0.basis(), coarse_fit.1, uc);
+                    // The normal distance of the finer curve from the coarse.
+                    (pf[0] - f.point[0]) * f.normal[0] + (pf[1] - f.point[1]) * f.normal[1] - dc
                 }
                 _ => {
                     displacement(fine.corr.basis(), &fine.lambda, u)

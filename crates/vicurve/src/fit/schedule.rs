@@ -283,12 +283,7 @@ impl<'s> Schedule<'s> {
         if !curve.is_closed() || !curve.corners().is_empty() {
             return 0.0;
         }
-        let l = curve.param_length();
-        let n = l.ceil().max(1.0) as usize;
-        let largest = (0..n)
-            .map(|i| curve.frame(i as f64 * l / n as f64).curvature.abs())
-            .fold(0.0, f64::max);
-        self.band_limit().min(0.5 / largest)
+        self.band_limit().min(0.5 / curve.largest_curvature(1.0))
     }
 
     /// The widest band half-width that suits the current curve (pixels,

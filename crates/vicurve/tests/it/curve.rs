@@ -29,6 +29,8 @@ fn circle_is_represented_to_a_micro_pixel() {
         );
     }
     assert!((c.arc_length() - std::f64::consts::TAU * r).abs() < 1e-5);
+    // Its largest curvature is the circle's.
+    assert!((c.largest_curvature(1.0) - 1.0 / r).abs() < 1e-5);
     assert!((c.area().unwrap() - std::f64::consts::PI * r * r).abs() < 1e-3);
 }
 
@@ -62,6 +64,7 @@ fn segment_is_exact_and_straight() {
     assert!(!c.is_closed());
     // The tiny regularisation of the fit shortens it by ~1e-8 px.
     assert!((c.arc_length() - 100.0).abs() < 1e-7);
+    assert!(c.largest_curvature(0.5) < 1e-9);
     let f = c.frame(30.0);
     assert!((f.point[0] - 40.0).abs() < 1e-9 && (f.point[1] - 20.0).abs() < 1e-9);
     // Travelling +x, the normal points +y (down on screen).
