@@ -319,13 +319,22 @@ pub(super) fn shortest_element(blur: f64) -> f64 {
 /// kappa^2`: shorter elements there follow the model's error, not the
 /// image, and the blur's floor keeps them long.
 pub(super) fn shortest_pixel_edge(reference: &SplineCurve, blur: f64, shortest: f64) -> f64 {
-    let floor = shortest_element(blur).max(shortest);
-    let kappa = reference.largest_curvature(CURVATURE_STEP);
-    if spread_variance(blur) * kappa * kappa <= CURVED_EDGE_REACH {
+    if within_curved_edge_reach(reference, blur) {
         shortest
     } else {
-        floor
+        shortest_element(blur).max(shortest)
     }
+}
+
+/// Whether the curvature of `reference` stays within the reach of the
+/// profile's curved edge under an optical blur of `blur` pixels: `v
+/// kappa^2` at most [`CURVED_EDGE_REACH`] everywhere (`v` =
+/// [`spread_variance`]). Beyond it (a corner no break declares) the
+/// profile's expansion, and the settles' gain that follows from it, no
+/// longer describe the edge.
+pub(super) fn within_curved_edge_reach(reference: &SplineCurve, blur: f64) -> bool {
+    let kappa = reference.largest_curvature(CURVATURE_STEP);
+    spread_variance(blur) * kappa * kappa <= CURVED_EDGE_REACH
 }
 
 /// The largest `v kappa^2` of a curve whose pixel-edge stage may refine
@@ -380,7 +389,7 @@ pub(super) fn one_settle_shape_gain(blur: f64, h: f64) -> f64 {
 }
 
 /// The settle's gain `g = x exp(-x / 2)` at `x = v k^2 / 2`.
-fn gain_of(x: f64) -> f64 {
+pub(super) fn gain_of(x: f64) -> f64 {
     x * (-0.5 * x).exp()
 }
 

@@ -22,7 +22,8 @@
 //!   rule (`crate::correlation` makes each iteration).
 //! - `refine.rs`, `robust.rs`, `blur.rs`: the element refinement, the
 //!   robust weights, the edge's blur and the pixel-edge stage's band.
-//! - `reference.rs`: a converged curve as the next reference.
+//! - `reference.rs`: a converged curve as the next reference;
+//!   `settle.rs`: a settle's reference taken to the settles' fixed point.
 //! - `loops.rs`: a new reference or result that crosses itself or folds
 //!   back is a divergence.
 //! - `output.rs`: the measured curve and its samples with `sigma`;
@@ -58,6 +59,7 @@ mod refine;
 mod robust;
 mod run;
 mod schedule;
+mod settle;
 mod stage;
 mod track;
 

@@ -17,6 +17,7 @@ mod pyramid;
 mod refine;
 mod robust;
 mod run;
+mod settle;
 mod sharp;
 mod sigma;
 mod stage;
