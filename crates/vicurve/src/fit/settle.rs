@@ -83,8 +83,7 @@ pub(super) fn extrapolated(
 /// The periodic sequence `x` with its discrete Fourier transform
 /// multiplied by `m(w)`, `w = 2 pi p / n` in `[0, pi]` (an even real
 /// multiplier): a direct transform, `O(n^2)` on a table of the `n` roots
-/// of unity (a settle's few hundred control values take well under a
-/// millisecond).
+/// of unity, made once per settle.
 fn filtered(x: &[f64], m: impl Fn(f64) -> f64) -> Vec<f64> {
     let n = x.len();
     let roots: Vec<(f64, f64)> = (0..n)

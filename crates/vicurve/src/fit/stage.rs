@@ -7,8 +7,10 @@
 //! the checks made once per stage (varying levels significant? elements
 //! refined, [`super::refine`]; clutter, [`super::robust`]), refits the
 //! pixel edge's blur ([`super::blur`]), and settles: the last stage of the
-//! default schedule re-references on its own result until the displacement
-//! vanishes, so that the result is a fixed point whatever the start. Then
+//! default schedule re-references on its own result (with a pushed
+//! profile, on the fixed point extrapolated from it, `fit/settle.rs`)
+//! until the displacement vanishes, so that the result is a fixed point
+//! whatever the start. Then
 //! the stage is done, and its result the next stage's reference.
 
 use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
@@ -50,8 +52,8 @@ const STALL_GAIN: f64 = 0.01;
 /// (`fit/settle.rs`), which the next settle's displacement measures the
 /// distance to. On noiseless blurred curves a looser tolerance leaves a
 /// part of that distance in the result that the sweep measures; on noisy
-/// ones the contraction test stops the settles first (docs/benchmarks.md
-/// gives the measurements).
+/// ones the settles mostly stop first, when they no longer contract
+/// (docs/benchmarks.md gives the measurements).
 const SETTLE_TOLERANCE: f64 = 0.002;
 /// A settle whose displacement is not under this fraction of the previous
 /// run's (with the same profile) does not contract: noise, not shape,
@@ -1032,8 +1034,10 @@ impl Schedule<'_> {
     }
 
     /// Settle (default schedule, last stage): whether to re-reference on
-    /// the measured curve, refitted with control points one element apart,
-    /// because the displacement has not vanished yet. The result is then a
+    /// the measured curve (with a pushed profile, on the settles' fixed
+    /// point extrapolated from it, `fit/settle.rs`), refitted with control
+    /// points one element apart, because the displacement has not vanished
+    /// yet. The result is then a
     /// fixed point of the stage (to about `SETTLE_TOLERANCE`), whatever the
     /// path that led there: two different starts give the same curve, and
     /// detail finer than the elements that the start (a traced boundary, a
