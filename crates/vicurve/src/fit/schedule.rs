@@ -28,6 +28,15 @@ use crate::virtual_image::pixel_edge::optical_blur;
 use crate::virtual_image::{Kind, Polarity, Profile};
 use std::f64::consts::TAU;
 
+/// The optical blur (pixels) from which a closed line's pixel-line stage
+/// refines its elements, as a pixel edge's does: a Gaussian blur of `b`
+/// pixels leaves `exp(-2 pi^2 b^2)` of the pixel grid's aliasing of the
+/// line's sides, under 1e-4 from 0.7 px. Sharper lines keep the last
+/// stage's elements, as finer ones follow that aliasing; so do open lines,
+/// whose ends grow an oscillation on shorter elements (docs/benchmarks.md,
+/// "A closed line's elements").
+const REFINED_LINE_BLUR: f64 = 0.7;
+
 /// Run the schedule of `config` from `reference`; with `tracked`, the
 /// tracking schedule instead (the pixel-edge stage alone, see
 /// [`super::track`]), on the band the cache keeps when it serves, and the
@@ -311,6 +320,23 @@ impl<'s> Schedule<'s> {
         )
     }
 
+    /// The elements of the stage matched to an optical `blur` (pixels)
+    /// appended after `stage`, whose elements ended `chosen` long: from
+    /// those, no shorter than the blur resolves ([`shortest_element`]),
+    /// refined further when `refined` and `stage` could refine
+    /// (below that where the curve's curvature is within the profile's
+    /// reach, [`shortest_pixel_edge`]); fixed otherwise.
+    fn matched_elements(&self, stage: &Stage, chosen: f64, blur: f64, refined: bool) -> Elements {
+        let floor = shortest_element(blur);
+        match stage.elements {
+            Elements::Auto { shortest, .. } if refined => Elements::Auto {
+                longest: chosen.max(floor),
+                shortest: shortest_pixel_edge(&self.current, blur, shortest),
+            },
+            _ => Elements::Length(chosen.max(floor)),
+        }
+    }
+
     /// After the last stage: estimate the edge's blur on the measured
     /// curve and, with the default schedule, measure once more with a
     /// profile matched to it: for a silhouette the pixel edge through that
@@ -340,14 +366,7 @@ impl<'s> Schedule<'s> {
                 // not have), below that where the curve's curvature is
                 // within the profile's reach (`shortest_pixel_edge`).
                 let blur = optical_blur(e.sigma);
-                let floor = shortest_element(blur);
-                let elements = match stage.elements {
-                    Elements::Auto { shortest, .. } => Elements::Auto {
-                        longest: chosen.max(floor),
-                        shortest: shortest_pixel_edge(&self.current, blur, shortest),
-                    },
-                    _ => Elements::Length(chosen.max(floor)),
-                };
+                let elements = self.matched_elements(stage, chosen, blur, true);
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelEdge { blur });
                 self.stages.push(Stage {
@@ -355,12 +374,16 @@ impl<'s> Schedule<'s> {
                     elements,
                 });
             } else if let (true, Some(width)) = (good, e.line_width) {
-                // A line: the pixel line through its blur and width, on
-                // the elements the last stage chose (no shorter than the
-                // blur resolves), its band the pixel edge's beyond each
-                // side.
+                // A line: the pixel line through its blur and width, its
+                // band the pixel edge's beyond each side. A closed line
+                // blurred by `REFINED_LINE_BLUR` at least chooses its
+                // elements as a pixel edge does (the last stage's sine
+                // profile stops on a blurred line's profile mismatch as it
+                // does on an edge's); others keep the last stage's, no
+                // shorter than the blur resolves.
                 let blur = optical_blur(e.sigma);
-                let elements = Elements::Length(chosen.max(shortest_element(blur)));
+                let refined = blur >= REFINED_LINE_BLUR && self.current.is_closed();
+                let elements = self.matched_elements(stage, chosen, blur, refined);
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelLine { blur, width });
                 let half_width = 0.5 * width + self.pixel_edge_band(blur);
