@@ -9,6 +9,23 @@ use vicurve::render::{Method, RenderSpec};
 use vicurve::truth::Shape;
 use vicurve::virtual_image::{Kind, Profile};
 
+/// A ring of radius 110 px in a 300x300 image, and a circle 1.2 px off it
+/// to start from.
+fn ring() -> (Shape, InitialCurve) {
+    (
+        Shape::Circle {
+            cx: 150.3,
+            cy: 149.8,
+            r: 110.0,
+        },
+        InitialCurve::Circle {
+            cx: 151.0,
+            cy: 148.8,
+            r: 111.0,
+        },
+    )
+}
+
 /// A focused line 2.5 px wide, exact coverage, 8-bit, noiseless.
 fn focused_line(shape: Shape) -> RenderSpec {
     RenderSpec {
@@ -37,18 +54,6 @@ fn a_focused_thin_line_is_measured_with_the_pixel_line() {
         kind: Kind::Contour,
         ..FitConfig::default()
     };
-    let ring = (
-        Shape::Circle {
-            cx: 150.3,
-            cy: 149.8,
-            r: 110.0,
-        },
-        InitialCurve::Circle {
-            cx: 151.0,
-            cy: 148.8,
-            r: 111.0,
-        },
-    );
     let sine = (
         Shape::Sine {
             y0: 150.35,
@@ -65,7 +70,7 @@ fn a_focused_thin_line_is_measured_with_the_pixel_line() {
             y1: 151.5,
         },
     );
-    for (name, (shape, init)) in [("ring", ring), ("sine", sine)] {
+    for (name, (shape, init)) in [("ring", ring()), ("sine", sine)] {
         let spec = focused_line(shape);
         let (m, e) = run(&spec, init, config.clone());
         let last = m.stages.last().unwrap();
@@ -98,20 +103,11 @@ fn a_blurred_ring_line_refines_its_elements() {
         kind: Kind::Contour,
         ..FitConfig::default()
     };
-    let shape = Shape::Circle {
-        cx: 150.3,
-        cy: 149.8,
-        r: 110.0,
-    };
+    let (shape, init) = ring();
     let spec = RenderSpec {
         blur_sigma: 2.0,
         bits: Some(16),
         ..focused_line(shape)
-    };
-    let init = InitialCurve::Circle {
-        cx: 151.0,
-        cy: 148.8,
-        r: 111.0,
     };
     let (m, e) = run(&spec, init, config);
     let last = m.stages.last().unwrap();
