@@ -2,10 +2,9 @@
 //! shortest elements judged on references of its own.
 
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, FitConfig, Outcome};
-use vicurve::render::render;
-use vicurve::truth::evaluate;
+use vicurve::fit::{FitConfig, Outcome};
 
+use super::run;
 use crate::common::disc;
 
 /// A small disc (radius 10 px: a hole, a circle grid's dot), blurred by 1
@@ -25,8 +24,7 @@ fn a_small_disc_refines_on_its_own_reference() {
         cy: 31.3,
         r: 10.0,
     };
-    let m = measure(&render(&spec).unwrap(), &init, &FitConfig::default()).unwrap();
-    let s = evaluate(&m.points(), &spec.shape).unwrap();
+    let (m, s) = run(&spec, init, FitConfig::default());
     let elements = m.stages.last().unwrap().elements;
     println!(
         "disc r = 10, blur 1: {elements} elements, bias {:+.2e} scatter {:.2e} max {:.2e}",

@@ -2,10 +2,10 @@
 //! settles' fixed point.
 
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, FitConfig, Outcome};
-use vicurve::render::render;
-use vicurve::truth::{evaluate, Shape};
+use vicurve::fit::{FitConfig, Outcome};
+use vicurve::truth::Shape;
 
+use super::run;
 use crate::common::spec;
 
 /// An ellipse of semi-axes 90 and 55 px under a 4 px blur, noiseless, 16
@@ -24,14 +24,13 @@ fn a_blurred_ellipse_settles_on_its_fixed_point() {
         b: 55.0,
         angle: 0.4,
     };
-    let image = render(&spec(shape.clone(), (256, 256), 4.0, 0.0, 3, Some(16))).unwrap();
+    let spec = spec(shape, (256, 256), 4.0, 0.0, 3, Some(16));
     let init = InitialCurve::Circle {
         cx: 128.0,
         cy: 128.0,
         r: 72.0,
     };
-    let m = measure(&image, &init, &FitConfig::default()).unwrap();
-    let s = evaluate(&m.points(), &shape).unwrap();
+    let (m, s) = run(&spec, init, FitConfig::default());
     let last = m.stages.last().unwrap();
     println!(
         "ellipse 90 x 55, blur 4: {} elements, {} iterations, bias {:+.2e} scatter {:.2e} max {:.2e}",

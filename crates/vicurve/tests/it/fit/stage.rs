@@ -1,10 +1,10 @@
 //! A stage's runs and references (`fit/stage.rs`).
 
 use vicurve::curve::InitialCurve;
-use vicurve::fit::{measure, FitConfig, Outcome};
-use vicurve::render::render;
-use vicurve::truth::{evaluate, Shape};
+use vicurve::fit::{FitConfig, Outcome};
+use vicurve::truth::Shape;
 
+use super::run;
 use crate::common::spec;
 
 /// A stage that cycles between two references stops re-referencing. A
@@ -33,8 +33,7 @@ fn a_cycling_stage_stops_re_referencing() {
         cy: 149.8,
         r: 100.0,
     };
-    let m = measure(&render(&spec).unwrap(), &init, &FitConfig::default()).unwrap();
-    let s = evaluate(&m.points(), &spec.shape).unwrap();
+    let (m, s) = run(&spec, init, FitConfig::default());
     for st in &m.stages {
         println!(
             "R = {}: {} elements, {} iterations, {} re-references",
