@@ -12,9 +12,10 @@
 //! with the band's half-width `R / k`, elements and the convergence
 //! tolerance `k` times shorter, and the curve mapped to the binned image's
 //! pixels. Its result, mapped back, is the next stage's reference. `k` is
-//! the largest of 4 and 2 that leaves a band of at least
+//! the largest of 8, 4 and 2 that leaves a band of at least
 //! [`MIN_BINNED_HALF_WIDTH`] binned pixels: the default schedule's `R =
-//! 20` stage runs on 4 x 4 blocks and its `R = 10` stage on 2 x 2.
+//! 20` stage runs on 8 x 8 blocks, its `R = 10` stage on 4 x 4, and its
+//! `R = 5` stage, when it is a coarse one, on 2 x 2.
 //!
 //! Binned pixel `(i, j)` covers the image's pixels `k i .. k i + k - 1`
 //! (columns) and `k j .. k j + k - 1` (rows): its centre is at `x = k i +
@@ -41,13 +42,20 @@ use crate::spline::Basis;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Narrowest band of a binned stage, in binned pixels: the default
-/// schedule's stage of `R = 5` px runs on the image itself, and the wider
-/// ones on blocks that leave them a band this wide.
-const MIN_BINNED_HALF_WIDTH: f64 = 5.0;
+/// Narrowest band of a binned stage, in binned pixels: wider than the
+/// `R = 2` px the default schedule's paper profile runs on in the image's
+/// own pixels, which brings a curve a pixel or two off onto the edge. A
+/// binned stage's job is the same in binned pixels.
+///
+/// Why not wider: a stage costs its band's pixels times its runs, and a
+/// far start's runs are as many on any binning (it re-references every
+/// `0.75 R` of the walk), so twice the binning is a quarter of the cost;
+/// the conformance sweep measures the same curves either way
+/// (docs/benchmarks.md, "Coarse stages on 8 x 8 blocks").
+const MIN_BINNED_HALF_WIDTH: f64 = 2.5;
 
 /// Binnings tried, largest first.
-const BINNINGS: [usize; 2] = [4, 2];
+const BINNINGS: [usize; 3] = [8, 4, 2];
 
 /// Smallest band (pixels of the image: twice the half-width times the
 /// curve's length) that a stage bins: a smaller one is cheap to build and

@@ -1,5 +1,5 @@
 //! Coarse stages on a binned image (`fit/pyramid.rs`): the wide stages of
-//! a far start run on 4 x 4 and 2 x 2 block means and hand the narrower
+//! a far start run on 8 x 8, 4 x 4 and 2 x 2 block means and hand the narrower
 //! stages a reference as good as their own would have; a thin line,
 //! which keeping one pixel in 16 missed, is still found; an open curve is
 //! not binned.
@@ -33,7 +33,8 @@ fn check(label: &str, m: &Measurement, e: &ErrorStats, scatter: f64) {
 
 /// A 5-lobed star (mean radius 200 px, amplitude 0.25, blur 1, noise 1 %,
 /// 8-bit) from the circle of 0.85 of its mean radius: the R = 20 px stage
-/// runs on 4 x 4 blocks, the R = 10 px stage on 2 x 2, the rest on the
+/// runs on 8 x 8 blocks, the R = 10 px stage on 4 x 4, the R = 5 px stage
+/// (a coarse one: the start is beyond its reach) on 2 x 2, the rest on the
 /// image, and the result is the edge to the noise's scatter. The binned
 /// stages report full-resolution steps: their last ones are under the
 /// band's re-referencing reach.
@@ -57,9 +58,9 @@ fn a_far_start_s_wide_stages_run_on_the_binned_image() {
     let (m, e) = run(&spec, init, FitConfig::default());
     check("far star", &m, &e, 1.5e-2);
     let b = binnings(&m);
-    assert_eq!(&b[..2], &[4, 2], "{b:?}");
-    assert!(b[2..].iter().all(|&k| k == 1), "{b:?}");
-    for s in &m.stages[..2] {
+    assert_eq!(&b[..3], &[8, 4, 2], "{b:?}");
+    assert!(b[3..].iter().all(|&k| k == 1), "{b:?}");
+    for s in &m.stages[..3] {
         let last = s.history.last().expect("history");
         assert!(last.max_step < 0.75 * s.half_width, "{last:?}");
     }
@@ -67,8 +68,8 @@ fn a_far_start_s_wide_stages_run_on_the_binned_image() {
 
 /// A thin dark ring (2.5 px wide, blur 1, noise 2 %, 8-bit, radius 150
 /// px) from the circle of its radius centred 15 px off (as the sweep's
-/// `circle-10pct` starts): on 4 x 4 blocks the line is a fifth of its contrast over
-/// one binned pixel, which the R = 20 px stage still follows (a band
+/// `circle-10pct` starts): on 8 x 8 blocks the line fills under a third
+/// of a binned pixel, which the R = 20 px stage still follows (a band
 /// keeping one pixel in 16 lost it, 4 to 13 px off).
 #[test]
 fn a_thin_line_is_found_through_the_binned_stages() {
@@ -98,7 +99,7 @@ fn a_thin_line_is_found_through_the_binned_stages() {
     };
     let (m, e) = run(&spec, init, config);
     check("ring line", &m, &e, 1.5e-2);
-    assert_eq!(binnings(&m)[0], 4);
+    assert_eq!(binnings(&m)[0], 8);
 }
 
 /// An open curve reaches the border, where a binned image has no pixel
