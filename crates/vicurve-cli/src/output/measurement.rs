@@ -47,15 +47,19 @@ pub fn write_outputs(
             first_error.get_or_insert(e);
         }
     };
-    if let Some(p) = &args.out {
-        let mut record =
-            ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
-        record.grow = grown;
-        note(write_json(p, &record));
-    }
-    if let Some(p) = &args.points {
-        note(write_points_csv(p, m));
-    }
+    // The result file (its derived measures: circle and ellipse fits) and
+    // the samples at once, on two cores.
+    let json = || {
+        args.out.as_ref().map(|p| {
+            let mut record =
+                ResultFile::new(path_text, (image.width(), image.height()), init, config, m);
+            record.grow = grown;
+            write_json(p, &record)
+        })
+    };
+    let points = || args.points.as_ref().map(|p| write_points_csv(p, m));
+    let (json, points) = rayon::join(json, points);
+    json.into_iter().chain(points).for_each(&mut note);
     if args.svg.is_some() || args.png.is_some() {
         let layers = overlay_layers(init, config, m)?;
         if let Some(p) = &args.svg {

@@ -15,6 +15,7 @@
 
 use super::Correlation;
 use crate::interp::Sampler;
+use rayon::prelude::*;
 
 /// One bin of the reference's parameter: the information `A` and the
 /// projected residual `sum w e c gamma'` of its band pixels.
@@ -44,24 +45,32 @@ impl Correlation {
         if self.levels.is_none() {
             return Vec::new();
         }
-        for i in 0..band.len() {
-            let w = band.weight[i];
-            if w <= 0.0 {
-                continue;
-            }
-            let (Some((_, c)), Some(e)) =
-                (self.levels_of_pixel(i), self.residual(i, lambda, sampler))
-            else {
-                continue;
-            };
-            let dg = match &self.pushed {
-                Some(_) => band.profile_at(i, self.displacement_at(i, lambda)).1,
-                None => band.dgamma[i],
-            };
-            let j = c * dg;
-            let k = ((band.s[i].max(0.0) / bin) as usize).min(nbins - 1);
-            bins[k].info += w * j * j;
-            bins[k].projected += w * e * j;
+        // Each pixel's terms in parallel, summed in the band's order (the
+        // same sums on any number of threads).
+        let terms: Vec<Option<(usize, f64, f64)>> = (0..band.len())
+            .into_par_iter()
+            .map(|i| {
+                let w = band.weight[i];
+                if w <= 0.0 {
+                    return None;
+                }
+                let (Some((_, c)), Some(e)) =
+                    (self.levels_of_pixel(i), self.residual(i, lambda, sampler))
+                else {
+                    return None;
+                };
+                let dg = match &self.pushed {
+                    Some(_) => band.profile_at(i, self.displacement_at(i, lambda)).1,
+                    None => band.dgamma[i],
+                };
+                let j = c * dg;
+                let k = ((band.s[i].max(0.0) / bin) as usize).min(nbins - 1);
+                Some((k, w * j * j, w * e * j))
+            })
+            .collect();
+        for (k, info, projected) in terms.into_iter().flatten() {
+            bins[k].info += info;
+            bins[k].projected += projected;
         }
         bins
     }

@@ -2,6 +2,7 @@
 //! CSV of a measurement, and any file written through a temporary name.
 
 use crate::fit::{Measurement, Sample};
+use rayon::prelude::*;
 use std::io::Write;
 use std::path::Path;
 
@@ -16,14 +17,31 @@ use std::path::Path;
 /// Errors: one line naming the file and the operating system's reason.
 pub fn write_points_csv(path: &Path, m: &Measurement) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    // The rows formatted in parallel, in blocks written in order: the
+    // same bytes, on every core.
+    let blocks: Vec<String> = m
+        .samples
+        .par_chunks(ROWS_PER_BLOCK)
+        .map(|chunk| {
+            let mut block = String::with_capacity(chunk.len() * 96);
+            for s in chunk {
+                block.push_str(&sample_row(s));
+                block.push('\n');
+            }
+            block
+        })
+        .collect();
     let file = std::fs::File::create(path).map_err(err)?;
     let mut w = std::io::BufWriter::new(file);
     writeln!(w, "{SAMPLE_COLUMNS}").map_err(err)?;
-    for s in &m.samples {
-        writeln!(w, "{}", sample_row(s)).map_err(err)?;
+    for block in &blocks {
+        w.write_all(block.as_bytes()).map_err(err)?;
     }
     w.flush().map_err(err)
 }
+
+/// Rows of [`write_points_csv`] formatted per parallel task.
+const ROWS_PER_BLOCK: usize = 512;
 
 /// The columns of a sample row ([`write_points_csv`]).
 pub const SAMPLE_COLUMNS: &str = "s,x,y,nx,ny,sigma,weight,sigma_noise,misfit";
