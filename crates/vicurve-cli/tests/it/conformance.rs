@@ -49,12 +49,12 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // 8 x 8 and 4 x 4 blocks (`fit/pyramid.rs`) the paper's last stage
     // (R = 5 px, 100 elements of 47 px, too long for the bays' 43 px radius
     // of curvature) lands 0.31 to 0.33 px off from the R = 10 stage's
-    // result instead of 0.18 to 0.29 px (eight starts a pixel apart,
-    // measured), its largest error in the bays 1.2 -> 1.35 px, its sigma
-    // following it (scatter/sigma 1.02). Its six siblings of the paper's
-    // schedule that pass moved the other way (scatter 0.052 -> 0.033,
-    // 0.154 -> 0.108, 0.128 -> 0.097 px, ...; docs/benchmarks.md,
-    // "Coarse stages on 8 x 8 blocks").
+    // result instead of 0.18 to 0.29 px (eight starts, their centres up
+    // to a pixel or their radii 5 px apart, measured), its largest error
+    // in the bays 1.2 -> 1.35 px, its sigma following it (scatter/sigma
+    // 1.02). The other eight far stars of the paper's schedule moved the
+    // other way (scatter 0.052 -> 0.033, 0.154 -> 0.108, 0.128 -> 0.097
+    // px, ...; docs/benchmarks.md, "Coarse stages on 8 x 8 blocks").
     (
         "far-star-l5-a0.30/blur1.5/noise1/8bit/bright/circle-0.85r/paper-stages",
         "covers 96.9 %",
