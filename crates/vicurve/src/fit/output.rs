@@ -12,6 +12,8 @@ use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::interp::Sampler;
+use crate::virtual_image::corner::REACH;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::{Kind, Profile};
 use rayon::prelude::*;
 
@@ -183,10 +185,57 @@ struct SigmaTerms<'a> {
     oscillation: Option<Vec<f64>>,
     /// Points of `x0 + U n` in an element.
     reach: usize,
-    /// The settles' noise gain on the Gauss–Newton `sigma`, times the root
-    /// of the residuals' correlation factor ([`super::correlated`]) and the
-    /// rounding's floor on the noise.
+    /// The settles' noise gain on the Gauss–Newton `sigma`.
     gain: f64,
+    /// The rounding's floor on the noise, a factor on `sigma`.
+    rounding: f64,
+    /// The residuals' correlation factor on the noise variance
+    /// ([`super::correlated`]), lowered where the requests are smaller
+    /// than the noise estimate says.
+    correlation: f64,
+    /// Where a corner's wedges reach, and the factor there.
+    near_corners: Option<NearCorners>,
+}
+
+/// The stretches of a curve with corners where the noise term keeps the
+/// unlowered correlation factor ([`SigmaTerms::gain_at`]).
+struct NearCorners {
+    /// The corners' reference parameters.
+    corners: Vec<f64>,
+    /// How far from a corner, in reference parameter ([`corner_reach`]).
+    reach: f64,
+    /// The reference's parameter length.
+    length: f64,
+    /// Whether the reference is closed.
+    closed: bool,
+    /// The unlowered factor.
+    correlation: f64,
+}
+
+impl NearCorners {
+    /// Whether reference parameter `u` lies within the reach of a corner.
+    fn holds(&self, u: f64) -> bool {
+        self.corners.iter().any(|&c| {
+            let d = (u - c).abs();
+            let d = if self.closed {
+                d.min(self.length - d)
+            } else {
+                d
+            };
+            d <= self.reach
+        })
+    }
+}
+
+/// How far from a corner (reference parameter, for `speed` pixels of
+/// curve per unit) its wedge model's errors reach along the sides: the
+/// wedge terms' [`REACH`] spreads of the pixel edge's blur (the pixel's
+/// own spread for other profiles), and an element beyond, whose
+/// displacement takes up what the wedge leaves at the side's end.
+fn corner_reach(profile: Profile, span: f64, speed: f64) -> f64 {
+    let blur = profile.blur().unwrap_or(0.0);
+    let spread = spread_variance(blur).sqrt();
+    REACH * spread / speed.max(1e-9) + span
 }
 
 impl<'a> SigmaTerms<'a> {
@@ -231,14 +280,28 @@ impl<'a> SigmaTerms<'a> {
         };
         let residual = ResidualMisfit::new(&fin.corr, &fin.lambda, sampler);
         // Residual requests smaller than the noise estimate says lower the
-        // noise term, except on a curve with corners: the corner's wedge
-        // model leaves errors at the sides' ends that the requests do not
-        // show, and the larger estimate is all that covers them
-        // (docs/benchmarks.md).
-        let lower = fin.reference.corners().is_empty();
-        let correlation = residual
-            .as_ref()
-            .map_or(1.0, |r| r.correlation_factor(fin.corr.basis(), lower));
+        // noise term, except near a corner: its wedge model leaves errors
+        // at the sides' ends that the requests do not show, and the larger
+        // estimate is all that covers them (docs/benchmarks.md). Along the
+        // sides beyond the wedges' reach the edge is a plain one.
+        let factor = |lower: bool| {
+            residual
+                .as_ref()
+                .map_or(1.0, |r| r.correlation_factor(fin.corr.basis(), lower))
+        };
+        let correlation = factor(true);
+        let corners = fin.reference.corners();
+        let near_corners = (!corners.is_empty()).then(|| NearCorners {
+            corners: corners.to_vec(),
+            reach: corner_reach(
+                fin.profile,
+                span,
+                fin.reference.arc_length() / fin.reference.param_length(),
+            ),
+            length: fin.reference.param_length(),
+            closed,
+            correlation: factor(false),
+        });
         // The noise estimate misses the rounding to the image's gray-level
         // steps (`Correlation::estimate_noise`): the Gauss–Newton `sigma`
         // scales as the root of the noise variance.
@@ -257,15 +320,29 @@ impl<'a> SigmaTerms<'a> {
             edge,
             oscillation,
             reach: ((span / step.max(1e-9)).round() as usize).max(1),
-            gain: gain * correlation.sqrt() * rounding,
+            gain,
+            rounding,
+            correlation,
+            near_corners,
         }
+    }
+
+    /// The factor on the Gauss–Newton `sigma` at reference parameter `u`:
+    /// the settles' gain, the rounding's floor, and the root of the
+    /// residuals' correlation factor (its unlowered value near a corner).
+    fn gain_at(&self, u: f64) -> f64 {
+        let correlation = match &self.near_corners {
+            Some(near) if near.holds(u) => near.correlation,
+            _ => self.correlation,
+        };
+        self.gain * correlation.sqrt() * self.rounding
     }
 
     /// The noise term and the misfit term (pixels) at point `i`, of
     /// reference parameter `u`.
     fn at(&self, i: usize, u: f64) -> (f64, f64) {
         let closed = self.fin.reference.is_closed();
-        let noise = self.gain * self.fin.corr.position_sigma(u);
+        let noise = self.gain_at(u) * self.fin.corr.position_sigma(u);
         let residual = self.residual.as_ref().map_or(0.0, |r| r.at(u));
         let oscillation = self
             .oscillation
