@@ -17,17 +17,18 @@ use std::collections::HashMap;
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     // Since the pixel-edge profile models a corner's blurred wedge
     // (`virtual_image::corner`) these two noiseless pentagons fail by
-    // little: the first's largest error (2.3e-3 px, at a corner) is
-    // measured against a scatter of 1.7e-4 px; the second's sigma
-    // (2.8e-3 px) overstates its scatter (1.4e-3 px; its largest error
-    // fell from 0.72 to 5.4e-3 px).
+    // little: the first's largest error (1.5e-3 px, at a corner) is
+    // measured against a scatter of 1.5e-4 px; the second's sigma
+    // (1.8e-3 px, its sides' share lowered since `fit/output.rs` keeps the
+    // unlowered noise term near the corners only) overstates its scatter
+    // (1.2e-3 px; its largest error fell from 0.72 to 4.5e-3 px).
     (
         "polygon/blur2/noise0/16bit/dark/polyline-1.5px",
-        "max 2.31e-3 > 8 x scatter 1.73e-4; scatter/sigma 0.54",
+        "max 1.47e-3 > 8 x scatter 1.53e-4",
     ),
     (
         "polygon-breaks/blur4/noise0/16bit/dark/circle-10pct",
-        "scatter/sigma 0.48",
+        "scatter/sigma 0.67",
     ),
     // The images are rendered as a camera records them since the blur
     // acts before the pixels integrate (`render::blur`). This noiseless
