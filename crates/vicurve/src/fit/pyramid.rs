@@ -48,10 +48,10 @@ use std::time::Instant;
 /// binned stage's job is the same in binned pixels.
 ///
 /// Why not wider: a stage costs its band's pixels times its runs, and a
-/// far start's runs are as many on any binning (it re-references every
-/// `0.75 R` of the walk), so twice the binning is a quarter of the cost,
-/// at the same accuracy on the conformance sweep (docs/benchmarks.md,
-/// "Coarse stages on 8 x 8 blocks").
+/// far start's runs are about as many on any binning (it re-references
+/// every `0.75 R` of the walk), so twice the binning leaves a quarter of
+/// the band's pixels to each run, at the same accuracy on the conformance
+/// sweep (docs/benchmarks.md, "Coarse stages on 8 x 8 blocks").
 const MIN_BINNED_HALF_WIDTH: f64 = 2.5;
 
 /// Binnings tried, largest first.
