@@ -229,9 +229,10 @@ pub struct Sample {
     #[serde(default = "nan")]
     pub sigma_noise: f64,
     /// Whether the model misfits here: the band's residuals near the
-    /// sample ask for a displacement beyond what the noise explains, or
-    /// the curve oscillates at its elements' scale, by more than the
-    /// noise term; `sigma` then covers that misfit.
+    /// sample ask for a displacement beyond what the noise explains, the
+    /// curve oscillates at its elements' scale, or the edge bends faster
+    /// than the elements can follow, by more than the noise term; `sigma`
+    /// then covers that misfit.
     #[serde(default)]
     pub misfit: bool,
     /// Mean robust weight of the last stage's band pixels within about a

@@ -33,18 +33,20 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // The images are rendered as a camera records them since the blur
     // acts before the pixels integrate (`render::blur`). This noiseless
     // star's scatter fell with it from 2.5e-3 to 7.0e-4 px, below what the
-    // misfit term of its sigma (3.9e-4 px) says.
+    // misfit term of its sigma (3.9e-4 px) says; the representation term
+    // (`fit/representation.rs`) raised its sigma to 4.5e-4 px.
     (
         "star-a0.2/blur1/noise0/16bit/dark/polyline-1.5px",
-        "scatter/sigma 1.81",
+        "scatter/sigma 1.57",
     ),
     // Not a worse result: since the refinement may take a last step onto
     // its shortest elements (`fit/refine.rs`) this noiseless sine edge's
-    // scatter fell from 1.7e-5 to 9.9e-6 px, and its largest error, at an
-    // end (1.4e-4 px), did not move.
+    // scatter fell from 1.7e-5 to about 9e-6 px, and its largest error, at
+    // an end (1.1e-4 px), did not move; its sigma (1.4e-5 px, the rounding
+    // of 16-bit levels) is over 1 / 0.7 of that scatter.
     (
         "sine-edge/blur0/noise0/16bit/dark/auto",
-        "max 1.38e-4 > 8 x scatter 9.95e-6",
+        "max 1.12e-4 > 8 x scatter 9.16e-6; scatter/sigma 0.65",
     ),
     // The one entry added after a change: since the coarse stages run on
     // 8 x 8 and 4 x 4 blocks (`fit/pyramid.rs`) the paper's last stage

@@ -28,6 +28,8 @@
 //!   back is a divergence.
 //! - `output.rs`: the measured curve and its samples with `sigma`;
 //!   `misfit.rs`: its model-misfit term (residuals, oscillation);
+//!   `representation.rs`: the shape error its elements leave where the
+//!   edge bends faster than they follow;
 //!   `correlated.rs`: the factor on its noise term for residuals
 //!   correlated along the curve (textured surfaces).
 //! - [`breaks`], [`grow`], `track.rs`: corners, growing a short start,
@@ -56,6 +58,7 @@ mod probe;
 mod pyramid;
 mod reference;
 mod refine;
+mod representation;
 mod robust;
 mod run;
 mod schedule;

@@ -7,6 +7,7 @@ use super::breaks;
 use super::misfit::{band_range, oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
 use super::refine::displacement;
+use super::representation::Representation;
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
@@ -118,16 +119,29 @@ impl Final {
         };
         let kept = output_points(&s, spacing, closing);
         let terms = SigmaTerms::new(self, sampler, (&params, &s), blur);
+        let speed = self.reference.arc_length() / self.reference.param_length();
+        let at: Vec<f64> = kept.iter().map(|&i| s[i]).collect();
+        let shapes = Representation::new(
+            self.corr.basis().element_length() * speed,
+            self.corr.basis().degree(),
+            self.profile,
+        )
+        .map(|r| r.along(&curve, &at));
         let (samples, lost): (Vec<Sample>, Vec<bool>) = kept
             .par_iter()
-            .map(|&i| {
+            .enumerate()
+            .map(|(k, &i)| {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
                 let (sigma_noise, misfit) = terms.at(i, params[i]);
                 let (misfit, lost) = terms.edge_checked(params[i], sigma_noise, misfit);
-                // The elements' shape error is spread over the curve: it
-                // counts in `sigma`, not as a local misfit.
-                let model = misfit.max(self.shape_error.unwrap_or(0.0));
+                // The shape error the elements leave where the edge bends
+                // faster than they follow, here (`representation.rs`).
+                let shape = shapes.as_ref().map_or(0.0, |r| r[k]);
+                // A rejected refinement's measure of the elements' shape
+                // error is spread over the curve: it counts in `sigma`,
+                // not as a local misfit.
+                let model = misfit.max(shape).max(self.shape_error.unwrap_or(0.0));
                 let sample = Sample {
                     s: s[i],
                     x: q[0],
@@ -136,7 +150,7 @@ impl Final {
                     ny: f.normal[1],
                     sigma: sigma_noise.hypot(model),
                     sigma_noise,
-                    misfit: misfit > sigma_noise,
+                    misfit: misfit.max(shape) > sigma_noise,
                     weight: weights.at(params[i]),
                 };
                 (sample, lost)
