@@ -161,8 +161,9 @@ pub struct FitConfig {
     pub breaks: Vec<f64>,
     /// Look for corners the start did not give: when the measured curve
     /// turns sharply within a few pixels and hardly beside (a polygon's
-    /// vertex), measure it again with breaks there and keep that result
-    /// when it fits the image better ([`crate::fit::measure_from`];
+    /// vertex), measure it again with breaks there and keep the corners
+    /// where the image looks more like a sharp corner than like the
+    /// smooth curve (`fit/corner_check.rs`; [`crate::fit::measure_from`];
     /// [`crate::measurement::Measurement::corners_found`] says where).
     /// Not when `breaks` are given or the start has corners. Default: true.
     pub find_corners: bool,

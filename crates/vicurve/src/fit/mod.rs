@@ -47,6 +47,7 @@
 mod blur;
 pub mod breaks;
 mod config;
+mod corner_check;
 mod corner_search;
 mod correlated;
 pub mod grow;
@@ -83,6 +84,7 @@ use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::Sampler;
+use crate::virtual_image::Kind;
 use blur::{pixel_edge_band, BLUR_TOLERANCE};
 use schedule::run_schedule;
 
@@ -116,7 +118,9 @@ pub fn measure_from(
 
 /// `m` measured again with breaks at the corners its curve shows
 /// ([`corner_search`]), when it has some and the new result converges
-/// without a residual RMS much above the smooth one's; else `m`. A smooth
+/// without a residual RMS much above the smooth one's; of a silhouette,
+/// only at the corners the image confirms ([`corner_check`]: measured
+/// once more when it confirms some but not all); else `m`. A smooth
 /// result at its iteration limit is searched too: a spline ringing at a
 /// polygon's corners is one reason a fit does not settle.
 fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> Measurement {
@@ -140,21 +144,79 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
         return m;
     };
     let residual = |m: &Measurement| m.stages.last().map_or(f64::INFINITY, |s| s.residual_rms);
-    match run_schedule(sampler, start, &with, None) {
-        Ok(mut c)
+    let c = match run_schedule(sampler, start, &with, None) {
+        Ok(c)
             if matches!(c.outcome, Outcome::Converged)
                 && residual(&c) < FOUND_CORNERS_GAIN * residual(&m) =>
         {
-            c.corners_found = c
-                .curve
-                .corners()
-                .iter()
-                .map(|&u| c.curve.point(u))
-                .collect();
             c
         }
-        _ => m,
+        _ => return m,
+    };
+    if config.kind != Kind::Silhouette {
+        return with_corners_listed(c);
     }
+    // The corners the image confirms (`corner_check.rs`); with only some
+    // of them, measured once more with those alone. Near a corner dropped
+    // on ambiguous evidence, `sigma` covers the sharp curve.
+    let verdicts = corner_check::verdicts(sampler, &m, &c);
+    let kept: Vec<[f64; 2]> = verdicts
+        .iter()
+        .filter(|v| v.keep)
+        .map(|v| v.vertex)
+        .collect();
+    if kept.len() == verdicts.len() {
+        return with_corners_listed(c);
+    }
+    let mut chosen = if kept.is_empty() {
+        m
+    } else {
+        let points = m.points();
+        let with = FitConfig {
+            breaks: kept
+                .iter()
+                .map(|&v| polyline_arc_length(&points, v))
+                .collect(),
+            ..config.clone()
+        };
+        let init = InitialCurve::Polyline { points, closed };
+        match breaks::initial_curve(&init, &with.breaks)
+            .and_then(|start| run_schedule(sampler, start, &with, None))
+        {
+            Ok(r) if matches!(r.outcome, Outcome::Converged) => with_corners_listed(r),
+            _ => m,
+        }
+    };
+    corner_check::cover_dropped(&mut chosen, &c.curve, &verdicts);
+    chosen
+}
+
+/// `c` with its curve's corners listed as found.
+fn with_corners_listed(mut c: Measurement) -> Measurement {
+    c.corners_found = c
+        .curve
+        .corners()
+        .iter()
+        .map(|&u| c.curve.point(u))
+        .collect();
+    c
+}
+
+/// The arc length (pixels, from the first point) along the polyline
+/// `points` of its point nearest to `v`.
+fn polyline_arc_length(points: &[[f64; 2]], v: [f64; 2]) -> f64 {
+    let mut s = 0.0;
+    let (mut best, mut at) = (f64::INFINITY, 0.0);
+    for (k, p) in points.iter().enumerate() {
+        if k > 0 {
+            s += crate::curve::dist(points[k - 1], *p);
+        }
+        let d = crate::curve::dist(*p, v);
+        if d < best {
+            (best, at) = (d, s);
+        }
+    }
+    at
 }
 
 /// A measurement with found corners is kept unless its residual RMS

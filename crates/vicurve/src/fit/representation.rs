@@ -141,7 +141,11 @@ impl Representation {
         let (mut dx, mut dy, mut weight) = (0.0, 0.0, 1.0);
         for k in 0..=order {
             let q = curve.point(wrap(start + k as f64 * delta));
-            let sign = if (order - k).is_multiple_of(2) { 1.0 } else { -1.0 };
+            let sign = if (order - k).is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
             dx += sign * weight * q[0];
             dy += sign * weight * q[1];
             weight = weight * (order - k) as f64 / (k + 1) as f64;

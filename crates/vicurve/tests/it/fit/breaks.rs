@@ -399,3 +399,82 @@ fn a_small_square_from_its_inscribed_circle() {
     assert!(all <= 0.02, "max error {all} px");
     assert!((area - 1600.0).abs() < 0.5, "area {area}");
 }
+
+/// The signed distance (px, positive outside) of `p` to the rectangle of
+/// centre `c`, half-sides `half`, turned by `angle` (counterclockwise on
+/// screen), whose corners are rounded to the radius `rho`.
+fn rounded_rectangle_distance(
+    p: [f64; 2],
+    c: [f64; 2],
+    half: [f64; 2],
+    angle: f64,
+    rho: f64,
+) -> f64 {
+    let (dx, dy) = (p[0] - c[0], p[1] - c[1]);
+    let (cos, sin) = (angle.cos(), angle.sin());
+    // Into the rectangle's axes (screen y points down).
+    let (u, v) = ((dx * cos - dy * sin).abs(), (dx * sin + dy * cos).abs());
+    let (qx, qy) = (u - (half[0] - rho), v - (half[1] - rho));
+    qx.max(0.0).hypot(qy.max(0.0)) + qx.max(qy).min(0.0) - rho
+}
+
+/// The boundary of that rounded rectangle, points about 0.05 px apart.
+fn rounded_rectangle(c: [f64; 2], half: [f64; 2], angle: f64, rho: f64) -> Vec<[f64; 2]> {
+    let (cos, sin) = (angle.cos(), angle.sin());
+    let mut local = Vec::new();
+    let corners = [
+        (half[0] - rho, half[1] - rho, 0.0),
+        (-(half[0] - rho), half[1] - rho, 0.5),
+        (-(half[0] - rho), -(half[1] - rho), 1.0),
+        (half[0] - rho, -(half[1] - rho), 1.5),
+    ];
+    for (x0, y0, start) in corners {
+        let n = (rho * std::f64::consts::FRAC_PI_2 / 0.05).ceil() as usize;
+        for k in 0..=n {
+            let t = std::f64::consts::PI * (start + 0.5 * k as f64 / n as f64);
+            local.push([x0 + rho * t.cos(), y0 + rho * t.sin()]);
+        }
+    }
+    local
+        .iter()
+        .map(|&[u, v]| [c[0] + u * cos + v * sin, c[1] - u * sin + v * cos])
+        .collect()
+}
+
+/// A corner the turning finds but the image does not show is not kept
+/// (`fit/corner_check.rs`): a 440 x 280 px rectangle whose corners are
+/// rounded to 10 px, blurred by 3 px, 1 % noise, 8 bits. Its rounded
+/// corners turn within 10 px as much as a blurred sharp one; measured with
+/// breaks there, the curve came out up to 1.05 px outside the arcs, at up
+/// to 17 of its `sigma`, reported converged (measured before, on the
+/// same case rendered by another renderer). Now no corner is found and
+/// the curve stays within 0.15 px of the arcs.
+#[test]
+fn rounded_corners_are_not_taken_for_sharp_ones() {
+    let (c, half, angle, rho) = ([350.4, 300.2], [220.0, 140.0], 0.2, 10.0);
+    let ring = rounded_rectangle(c, half, angle, rho);
+    let (w, h) = (700, 600);
+    let mut data = vicurve::render::blur::blurred_coverage(w, h, &[ring], 3.0).unwrap();
+    data.iter_mut().for_each(|v| *v = 0.2 + 0.6 * *v);
+    vicurve::render::noise::add_gaussian_noise(&mut data, 0.006, 5);
+    vicurve::render::noise::quantise(&mut data, 8);
+    let image = Image::new(w, h, data).unwrap();
+    let init = InitialCurve::Circle {
+        cx: 354.0,
+        cy: 297.0,
+        r: 190.0,
+    };
+    let m = measure(&image, &init, &FitConfig::default()).expect("rounded rectangle");
+    let worst = m
+        .samples
+        .iter()
+        .map(|s| rounded_rectangle_distance([s.x, s.y], c, half, angle, rho).abs())
+        .fold(0.0f64, f64::max);
+    println!(
+        "rectangle with corners rounded to 10 px, blur 3: {} corners found, max error {worst:.3} px",
+        m.corners_found.len()
+    );
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert!(m.corners_found.is_empty(), "{:?}", m.corners_found);
+    assert!(worst <= 0.15, "max error {worst} px");
+}
