@@ -230,9 +230,10 @@ pub struct Sample {
     pub sigma_noise: f64,
     /// Whether the model misfits here: the band's residuals near the
     /// sample ask for a displacement beyond what the noise explains, the
-    /// curve oscillates at its elements' scale, or the edge bends faster
-    /// than the elements can follow, by more than the noise term; `sigma`
-    /// then covers that misfit.
+    /// curve oscillates at its elements' scale, the edge bends faster
+    /// than the elements can follow, or a corner found near it was
+    /// dropped on evidence the noise could have made, by more than the
+    /// noise term; `sigma` then covers that misfit.
     #[serde(default)]
     pub misfit: bool,
     /// Mean robust weight of the last stage's band pixels within about a

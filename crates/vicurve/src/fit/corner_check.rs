@@ -9,22 +9,29 @@
 //! with a break leaves the wedge beyond the vertex out of its band, and
 //! bends its sides near the vertex until the rest of the band agrees, so
 //! a rectangle whose corners are rounded to 10 px, blurred by 3 px,
-//! came out with its "corners" 1.1 px outside the true arcs, at 7 to 17
-//! times their `sigma`, and a residual RMS 6 % above the smooth fit's
-//! (the found corners' rule let up to 25 % through), reported converged.
+//! came out with its "corners" up to 1.1 px outside the true arcs, at 4
+//! to 17 times their `sigma`, and a residual RMS 6 % above the smooth
+//! fit's (the found corners' rule let up to 25 % through), reported
+//! converged.
 //!
 //! So each hypothesis is rendered as the camera would record it, the
 //! region bounded by its measured curve by exact pixel coverage under
 //! the measured blur ([`blurred_coverage`]), on the pixels within
 //! [`PATCH`] of the vertex (plus two spreads of the blur), and fitted to
-//! the image there with a dark level and a contrast of its own; the
-//! corner is kept when its sum of squared residuals is not above the
-//! smooth curve's by more than [`TOLERANCE`] noise variances. Measured on
-//! the conformance pentagons (corners of 108 degrees, blur 0 to 4 px,
-//! noise 0 to 5 %) the sharp corner wins by tens to thousands of
-//! variances except at the highest noise, where the two are within a few
-//! (the image cannot tell them apart); on those rounded rectangles the
-//! smooth curve wins by 12 to 380.
+//! the image there with a dark level and a contrast of its own. The
+//! difference of their sums of squared residuals, in noise variances, is
+//! the evidence for the smooth curve: about `+D` when the corner is
+//! rounded and `-D` when it is sharp, `D` the two renderings' squared
+//! difference in noise variances, with a noise of standard deviation `2
+//! sqrt(D)`. The corner is kept unless that evidence exceeds
+//! [`TOLERANCE`] and one such deviation. Measured on the conformance
+//! pentagons (corners of 108 degrees, blur 0 to 4 px, noise 0 to 5 %) the
+//! sharp corner wins by tens to thousands of variances except at 5 %
+//! noise, where the two are within about two deviations either way (the
+//! image can hardly tell them apart); on those rounded rectangles the
+//! smooth curve wins by 12 to 380, about `D`. A corner dropped by less
+//! than [`AMBIGUITY`] deviations leaves `sigma` covering the sharp curve
+//! near it ([`cover_dropped`]).
 //!
 //! Edge cases: only closed and open silhouettes (a line's image is not a
 //! region's); a corner near which the curve passes again within the patch
