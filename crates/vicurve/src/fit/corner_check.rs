@@ -94,6 +94,7 @@ pub(super) fn verdicts(
         .max(sampler.rounding_variance())
         .max(f64::MIN_POSITIVE);
     let curve = &cornered.curve;
+    let smooth_feet = Feet::new(&smooth.curve);
     curve
         .corners()
         .iter()
@@ -108,8 +109,7 @@ pub(super) fn verdicts(
                 return kept;
             };
             let sharp = patch.misfit(curve, u);
-            let round =
-                smooth_param(&smooth.curve, vertex).and_then(|w| patch.misfit(&smooth.curve, w));
+            let round = patch.misfit(&smooth.curve, smooth_feet.project(vertex).0);
             let (Some((sharp, ps)), Some((round, pr))) = (sharp, round) else {
                 return kept;
             };
@@ -148,26 +148,13 @@ pub(super) fn cover_dropped(m: &mut Measurement, sharp: &SplineCurve, verdicts: 
     if near.is_empty() {
         return;
     }
-    let length = sharp.param_length();
-    let n = (length.ceil() as usize).max(8);
-    let table: Vec<(f64, [f64; 2])> = (0..n)
-        .map(|k| {
-            let u = k as f64 * length / n as f64;
-            (u, sharp.point(u))
-        })
-        .collect();
+    let feet = Feet::new(sharp);
     for s in m.samples.iter_mut() {
         let p = [s.x, s.y];
         if !near.iter().any(|&v| dist2(p, v) <= PATCH * PATCH) {
             continue;
         }
-        let Some(&(u0, _)) = table
-            .iter()
-            .min_by(|a, b| dist2(a.1, p).total_cmp(&dist2(b.1, p)))
-        else {
-            continue;
-        };
-        let apart = sharp.project(p[0], p[1], u0).r.abs();
+        let apart = feet.project(p).1.abs();
         let model = (s.sigma.powi(2) - s.sigma_noise.powi(2)).max(0.0).sqrt();
         if apart > model {
             s.sigma = s.sigma_noise.hypot(apart);
@@ -187,16 +174,37 @@ fn measured_blur(m: &Measurement) -> Option<f64> {
         .or_else(|| m.stages.last().and_then(|s| s.profile.blur()))
 }
 
-/// The parameter of the point of `curve` nearest to `v` (sampled every
-/// pixel, then projected).
-fn smooth_param(curve: &SplineCurve, v: [f64; 2]) -> Option<f64> {
-    let length = curve.param_length();
-    let n = (length.ceil() as usize).max(8);
-    let nearest = (0..n)
-        .map(|k| k as f64 * length / n as f64)
-        .min_by(|&a, &b| dist2(curve.point(a), v).total_cmp(&dist2(curve.point(b), v)))?;
-    let p = curve.project(v[0], v[1], nearest);
-    p.u.is_finite().then_some(p.u)
+/// The closest points of a curve: its points a pixel of parameter apart,
+/// the nearest one the start of the exact projection.
+struct Feet<'c> {
+    curve: &'c SplineCurve,
+    table: Vec<(f64, [f64; 2])>,
+}
+
+impl<'c> Feet<'c> {
+    fn new(curve: &'c SplineCurve) -> Self {
+        let length = curve.param_length();
+        let n = (length.ceil() as usize).max(8);
+        let table = (0..n)
+            .map(|k| {
+                let u = k as f64 * length / n as f64;
+                (u, curve.point(u))
+            })
+            .collect();
+        Feet { curve, table }
+    }
+
+    /// The parameter of `p`'s closest point on the curve and its signed
+    /// distance from there, pixels.
+    fn project(&self, p: [f64; 2]) -> (f64, f64) {
+        let u0 = self
+            .table
+            .iter()
+            .min_by(|a, b| dist2(a.1, p).total_cmp(&dist2(b.1, p)))
+            .map_or(0.0, |t| t.0);
+        let foot = self.curve.project(p[0], p[1], u0);
+        (foot.u, foot.r)
+    }
 }
 
 fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {

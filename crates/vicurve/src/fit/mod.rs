@@ -205,18 +205,12 @@ fn with_corners_listed(mut c: Measurement) -> Measurement {
 /// The arc length (pixels, from the first point) along the polyline
 /// `points` of its point nearest to `v`.
 fn polyline_arc_length(points: &[[f64; 2]], v: [f64; 2]) -> f64 {
-    let mut s = 0.0;
-    let (mut best, mut at) = (f64::INFINITY, 0.0);
-    for (k, p) in points.iter().enumerate() {
-        if k > 0 {
-            s += crate::curve::dist(points[k - 1], *p);
-        }
-        let d = crate::curve::dist(*p, v);
-        if d < best {
-            (best, at) = (d, s);
-        }
-    }
-    at
+    let s = reference::chord_lengths(points);
+    points
+        .iter()
+        .zip(&s)
+        .min_by(|a, b| crate::curve::dist(*a.0, v).total_cmp(&crate::curve::dist(*b.0, v)))
+        .map_or(0.0, |(_, &s)| s)
 }
 
 /// A measurement with found corners is kept unless its residual RMS
