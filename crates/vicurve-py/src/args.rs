@@ -131,6 +131,8 @@ pub struct SynthArgs {
     pub bits: Option<u8>,
     /// Background, foreground (default 0.2, 0.8; the paper disc's 0, 1).
     pub levels: Option<(f64, f64)>,
+    /// Tone curve encoding the light (linear).
+    pub tone: vicurve::tone::Tone,
 }
 
 impl SynthArgs {
@@ -155,6 +157,7 @@ impl SynthArgs {
             seed: 1,
             bits: Some(8),
             levels: None,
+            tone: vicurve::tone::Tone::Linear,
         }
     }
 }
@@ -259,6 +262,7 @@ pub fn synth_spec(a: &SynthArgs) -> Result<RenderSpec, vicurve::Error> {
         noise: a.noise,
         seed: a.seed,
         bits: a.bits,
+        tone: a.tone,
     };
     spec.validate()?;
     Ok(spec)

@@ -39,6 +39,7 @@ pub(crate) struct FitOptions<'a, 'py> {
     pub max_iterations: i64,
     pub blur_correction: bool,
     pub levels: &'a str,
+    pub tone: &'a str,
 }
 
 impl FitOptions<'_, '_> {
@@ -55,6 +56,7 @@ impl FitOptions<'_, '_> {
             max_iterations: count("max_iterations", self.max_iterations)?,
             blur_correction: self.blur_correction,
             levels: self.levels.parse().map_err(to_py_err)?,
+            tone: self.tone.parse().map_err(to_py_err)?,
             ..FitConfig::default()
         })
     }
@@ -148,6 +150,11 @@ pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
 ///   uneven light along the curve; kept only when they explain the image
 ///   better than noise would), "varying:LEN" (elements of LEN px) or
 ///   "global" (one pair, the paper's).
+/// - `tone`: how the gray levels relate to the light: "auto" (the tone
+///   curve is estimated around a silhouette's edge and, when the image is
+///   clearly not linear, such as an sRGB JPEG, the edge is measured again
+///   in linear light; the result's `tone` and `tone_estimate`), "linear",
+///   "srgb", or a gamma such as "2.2".
 /// - `breaks`: arc lengths (pixels along the starting curve from its
 ///   start) where the curve may have a corner.
 /// - `find_corners`: without `breaks`, look for corners (a polygon's
@@ -172,7 +179,7 @@ pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
     image, init = None, *, kind = "silhouette", stages = None, degree = 3,
     polarity = "auto", interpolation = "cubic", tolerance = 1e-4,
     max_iterations = 200, blur_correction = true, levels = "varying", breaks = None,
-    grow = None, find_corners = true
+    grow = None, find_corners = true, tone = "auto"
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
@@ -191,6 +198,7 @@ pub fn measure(
     breaks: Option<Vec<f64>>,
     grow: Option<&Bound<'_, PyAny>>,
     find_corners: bool,
+    tone: &str,
 ) -> PyResult<PyMeasurement> {
     let grow = grow_from_py(grow)?;
     let mut config = FitOptions {
@@ -203,6 +211,7 @@ pub fn measure(
         max_iterations,
         blur_correction,
         levels,
+        tone,
     }
     .config()?;
     config.breaks = breaks.unwrap_or_default();
@@ -296,7 +305,9 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
 /// exact pixel coverage), `blur` (Gaussian, sigma), `noise` (standard
 /// deviation as a fraction of the contrast), `seed`, `bits` (8: uint8, 16:
 /// uint16, None: float64 without quantisation), `levels=(background,
-/// foreground)` in [0, 1] (0.2, 0.8).
+/// foreground)` in [0, 1] (0.2, 0.8), `tone` (the tone curve that
+/// encodes the light in the gray levels: "linear", "srgb" or a gamma such
+/// as "2.2"; the noise is added after it).
 ///
 /// The image is a (height, width) array equal to the file the command line
 /// writes; `truth` is the content of its truth file (the exact curve, the
@@ -306,8 +317,8 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
     shape, *, size = (512, 512), center = None, radius = None, axes = None,
     angle = 20.0, amplitude = None, lobes = 5, phase = 0.0, wavelength = None,
     y0 = None, line = None, profile = None, blur = 0.0, noise = 0.0, seed = 1,
-    bits = Some(8), levels = None
-), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, noise=0.0, seed=1, bits=8, levels=None)")]
+    bits = Some(8), levels = None, tone = "linear"
+), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, noise=0.0, seed=1, bits=8, levels=None, tone='linear')")]
 #[allow(clippy::too_many_arguments)]
 pub fn synth<'py>(
     py: Python<'py>,
@@ -329,6 +340,7 @@ pub fn synth<'py>(
     seed: i64,
     bits: Option<i64>,
     levels: Option<(f64, f64)>,
+    tone: &str,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mut a = SynthArgs::new(ShapeName::parse(shape).map_err(value_error)?);
     a.size = size;
@@ -347,6 +359,7 @@ pub fn synth<'py>(
     a.blur = blur;
     a.noise = noise;
     a.levels = levels;
+    a.tone = tone.parse().map_err(to_py_err)?;
     a.seed = u64::try_from(seed)
         .map_err(|_| value_error(format!("invalid seed: {seed} (must be >= 0)")))?;
     a.bits = match bits {

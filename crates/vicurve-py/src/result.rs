@@ -180,6 +180,21 @@ impl PyMeasurement {
         serde_to_py(py, &self.measurement.edge_spread)
     }
 
+    /// The tone curve the gray levels were read with: "linear" unless the
+    /// image was taken to linear light ("srgb" or {"gamma": g}).
+    #[getter]
+    fn tone<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        serde_to_py(py, &self.measurement.tone)
+    }
+
+    /// The tone curve estimated around the edge (`tone="auto"`,
+    /// silhouettes): a dict (curve, gamma, shift, evidence, position_sd,
+    /// pixels) or None.
+    #[getter]
+    fn tone_estimate<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        serde_to_py(py, &self.measurement.tone_estimate)
+    }
+
     /// Whether the result accounts for the blur (true boundary or centre
     /// line rather than the blurred one).
     #[getter]

@@ -360,7 +360,7 @@ pub fn progress_bar(py: Python<'_>, progress: bool, total: Option<usize>) -> Opt
     frames, init, *, kind = "silhouette", stages = None, track_stages = None, tracking = true,
     degree = 3, polarity = "auto", interpolation = "cubic", tolerance = 1e-4,
     max_iterations = 200, blur_correction = true, levels = "varying", out_dir = None,
-    force = false, progress = true
+    force = false, progress = true, tone = "auto"
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn track(
@@ -380,6 +380,7 @@ pub fn track(
     out_dir: Option<PathBuf>,
     force: bool,
     progress: bool,
+    tone: &str,
 ) -> PyResult<Tracker> {
     let first = FitOptions {
         kind,
@@ -391,6 +392,7 @@ pub fn track(
         max_iterations,
         blur_correction,
         levels,
+        tone,
     }
     .config()?;
     first.validate().map_err(to_py_err)?;

@@ -29,6 +29,8 @@ SYNTH_CASES = [
      dict(shape="ring", size=(200, 200), radius=60, line=2.5, blur=1)),
     (["sine-line", "--size", "220x140", "--levels", "0.8,0.3"],
      dict(shape="sine-line", size=(220, 140), levels=(0.8, 0.3))),
+    (["disc", "--size", "160x160", "--radius", "50", "--blur", "1", "--tone", "srgb"],
+     dict(shape="disc", size=(160, 160), radius=50, blur=1, tone="srgb")),
     (["paper-disc"], dict(shape="paper-disc")),
 ]
 

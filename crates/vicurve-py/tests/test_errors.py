@@ -90,6 +90,8 @@ def test_automatic_start_errors(disc):
         vicurve.measure(disc, vicurve.Segment(150, 90, 150, 110), grow="far")
     with pytest.raises(ValueError, match="levels"):
         vicurve.measure(disc, vicurve.Circle(100, 100, 55), levels="uneven")
+    with pytest.raises(ValueError, match="tone"):
+        vicurve.measure(disc, vicurve.Circle(100, 100, 55), tone="warm")
     with pytest.raises(ValueError, match="no contrast"):
         vicurve.measure(np.full((100, 100), 0.5), None)
     with pytest.raises(ValueError, match="outside"):

@@ -272,3 +272,19 @@ def test_contour_from_a_picked_point():
     assert r.outcome == "converged"
     assert r.config["levels"] == {"type": "global"}
     assert vicurve.eval(r.points, truth)["max_abs"] <= 3e-2
+
+
+def test_an_encoded_image_is_measured_in_linear_light():
+    """An sRGB-encoded disc: found by tone="auto", undone exactly as told."""
+    image, truth = vicurve.synth("disc", size=(200, 200), radius=60, blur=1.0, noise=0.01,
+                                 tone="srgb")
+    start = vicurve.Circle(100, 99, 60)
+    auto = vicurve.measure(image, start)
+    assert auto.tone != "linear"
+    assert auto.tone_estimate["evidence"] > 25
+    assert abs(vicurve.eval(auto.points, truth)["bias"]) < 0.05
+    told = vicurve.measure(image, start, tone="srgb")
+    assert told.tone == "srgb" and told.tone_estimate is None
+    assert abs(vicurve.eval(told.points, truth)["bias"]) < 5e-3
+    linear = vicurve.measure(image, start, tone="linear")
+    assert vicurve.eval(linear.points, truth)["bias"] > 0.1

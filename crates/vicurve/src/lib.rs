@@ -30,6 +30,7 @@ pub mod sequence;
 pub mod solver;
 pub mod spline;
 pub mod start;
+pub mod tone;
 pub mod truth;
 pub mod virtual_image;
 

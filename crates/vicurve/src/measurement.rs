@@ -4,6 +4,7 @@
 //! [`crate::report`] and [`crate::diagnostics`]; it imports none of them.
 
 use crate::curve::{SplineCurve, SplineCurveData};
+use crate::tone::{Tone, ToneEstimate};
 use crate::virtual_image::Profile;
 use serde::{Deserialize, Serialize};
 
@@ -325,6 +326,15 @@ pub struct Measurement {
     /// their positions on the measured curve `[x, y]`, px; empty when none
     /// was found or the smooth result was kept.
     pub corners_found: Vec<[f64; 2]>,
+    /// The tone curve the gray levels were read with: [`Tone::Linear`]
+    /// unless the image was taken to linear light first (an explicit
+    /// [`crate::fit::FitConfig::tone`], or the estimate of
+    /// [`Tone::Auto`] when it found the image clearly not linear).
+    pub tone: Tone,
+    /// The tone curve estimated around the measured edge on the image as
+    /// given ([`Tone::Auto`], silhouettes; see [`crate::tone::estimate`]);
+    /// `None` when not estimated.
+    pub tone_estimate: Option<ToneEstimate>,
 }
 
 /// The virtual image's gray levels at one place of the measured curve.

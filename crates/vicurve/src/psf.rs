@@ -233,7 +233,7 @@ fn valley_middle(ssr: impl Fn(f64) -> f64, w_best: f64, bounds: (f64, f64), limi
 /// thousandths of a pixel apart, where the profile does not change).
 /// Variation along the curve at equal `r` (texture) counts as noise.
 /// `data` sorted by `r`, as [`band_data`] gives it.
-fn noise_variance(data: &[(f64, f64)]) -> f64 {
+pub(crate) fn noise_variance(data: &[(f64, f64)]) -> f64 {
     let pairs = data.len().saturating_sub(1).max(1) as f64;
     let sum: f64 = data.windows(2).map(|p| (p[1].1 - p[0].1).powi(2)).sum();
     0.5 * sum / pairs
@@ -242,18 +242,23 @@ fn noise_variance(data: &[(f64, f64)]) -> f64 {
 /// Pixel values summed by distance to the curve, in bins of [`BIN_WIDTH`]:
 /// all that a profile fit `f ~ A + C g(r)` needs, in as many terms as there
 /// are bins whatever the number of pixels.
-struct Binned {
+pub(crate) struct Binned {
     /// Per non-empty bin: pixels, mean `r`, sum of `f`, sum of `f^2`.
-    bins: Vec<[f64; 4]>,
+    pub(crate) bins: Vec<[f64; 4]>,
 }
 
 impl Binned {
     /// Bin `data`, sorted by `r` ([`band_data`]).
-    fn new(data: &[(f64, f64)]) -> Binned {
+    pub(crate) fn new(data: &[(f64, f64)]) -> Binned {
+        Binned::with_width(data, BIN_WIDTH)
+    }
+
+    /// Bin `data`, sorted by `r`, in bins `width` pixels wide.
+    pub(crate) fn with_width(data: &[(f64, f64)], width: f64) -> Binned {
         let mut bins: Vec<[f64; 4]> = Vec::new();
         let mut current = None;
         for &(r, f) in data {
-            let index = (r / BIN_WIDTH).floor();
+            let index = (r / width).floor();
             if current != Some(index) {
                 current = Some(index);
                 bins.push([0.0; 4]);
@@ -311,6 +316,19 @@ pub(crate) fn band_data(
     half_width: f64,
     max: usize,
 ) -> Option<Vec<(f64, f64)>> {
+    band_data_where(sampler, curve, (half_width, 1), max, |_| true)
+}
+
+/// [`band_data`] of the pixels whose centre `keep` accepts, on a band of
+/// `(half_width, thin)` (one pixel in `thin` projected, see
+/// [`BandParams::thin`]).
+pub(crate) fn band_data_where(
+    sampler: &Sampler,
+    curve: &SplineCurve,
+    (half_width, thin): (f64, usize),
+    max: usize,
+    keep: impl Fn([f64; 2]) -> bool,
+) -> Option<Vec<(f64, f64)>> {
     let basis = Basis::new(
         1,
         if curve.is_closed() { 2 } else { 1 },
@@ -318,12 +336,15 @@ pub(crate) fn band_data(
         curve.is_closed(),
     )
     .ok()?;
-    let params = BandParams::new(
-        half_width,
-        Kind::Silhouette,
-        sampler.width(),
-        sampler.height(),
-    );
+    let params = BandParams {
+        thin,
+        ..BandParams::new(
+            half_width,
+            Kind::Silhouette,
+            sampler.width(),
+            sampler.height(),
+        )
+    };
     let band = Band::distances(curve, &basis, &params).ok()?;
     if band.len() < 50 {
         return None;
@@ -334,6 +355,7 @@ pub(crate) fn band_data(
     let mut data: Vec<(f64, f64)> = band
         .iter()
         .step_by(stride)
+        .filter(|&&(p, _)| keep(p))
         .filter_map(|&(p, r)| sampler.pixel(p[0] as usize, p[1] as usize).map(|f| (r, f)))
         .collect();
     data.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -26,6 +26,7 @@ use crate::fit::grow::GrowReport;
 use crate::fit::FitConfig;
 use crate::measurement::{LevelSample, Measurement, MisfitSummary, Outcome, StageReport, Trim};
 use crate::psf::EdgeSpread;
+use crate::tone::{Tone, ToneEstimate};
 use crate::virtual_image::Kind;
 use serde::Serialize;
 
@@ -67,6 +68,12 @@ pub struct ResultFile<'a> {
     pub edge_spread: Option<EdgeSpread>,
     /// Whether the blur's curvature shift was removed from the curve.
     pub blur_corrected: bool,
+    /// The tone curve the gray levels were read with (`linear` unless the
+    /// image was taken to linear light), see [`crate::tone`].
+    pub tone: Tone,
+    /// The tone curve estimated around the edge (`null` when not
+    /// estimated), see [`crate::tone::estimate`].
+    pub tone_estimate: Option<ToneEstimate>,
     /// Number of output samples.
     pub samples: usize,
     /// The samples where the model misfits (their `sigma` covers it).
@@ -166,6 +173,8 @@ impl<'a> ResultFile<'a> {
             derived: Derived::new(m),
             edge_spread: m.edge_spread,
             blur_corrected: m.blur_corrected,
+            tone: m.tone,
+            tone_estimate: m.tone_estimate,
             samples: m.samples.len(),
             misfit: m.misfit_summary(),
             stages: &m.stages,

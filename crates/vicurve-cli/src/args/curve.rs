@@ -124,6 +124,14 @@ pub struct BandArgs {
     /// keeps the smooth measurement.
     #[arg(long)]
     pub no_find_corners: bool,
+    /// How the gray levels relate to the light: `auto` (estimate the tone
+    /// curve around the measured edge and, when the image is clearly not
+    /// linear, measure again on it taken back to linear light; the JSON's
+    /// `tone` and `tone_estimate`; the default), `linear` (raw or linear
+    /// data), `srgb` (the sRGB encoding of most JPEG files) or a gamma,
+    /// e.g. `2.2` (the light is the gray level, on [0, 1], to that power).
+    #[arg(long, default_value = "auto", value_name = "CURVE")]
+    pub tone: String,
 }
 
 /// `--coords`: the two names with their help, read by
@@ -148,6 +156,10 @@ impl BandArgs {
         config.levels = parse_levels(&self.levels)?;
         config.breaks = self.breaks.clone();
         config.find_corners = !self.no_find_corners;
+        config.tone = self
+            .tone
+            .parse()
+            .map_err(|e| Failure::Error(format!("--tone: {e}")))?;
         Ok(())
     }
 }

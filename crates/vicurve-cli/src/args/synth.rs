@@ -118,6 +118,12 @@ pub struct Args {
     /// Bits per pixel of the saved image: 8 or 16 (default 8; necking 16).
     #[arg(long)]
     pub bits: Option<u8>,
+    /// Tone curve that encodes the light in the saved gray levels, as a
+    /// camera writing JPEG files does: `linear` (the default), `srgb`, or a
+    /// gamma such as `2.2`; the levels are light, the noise is added after
+    /// the encoding.
+    #[arg(long, default_value = "linear", value_name = "CURVE")]
+    pub tone: String,
     /// Necking: number of frames.
     #[arg(long, default_value_t = 8)]
     pub frames: usize,

@@ -159,6 +159,7 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
             e.fit_quality
         );
     }
+    print_tone(m);
     let sig: Vec<f64> = m
         .samples
         .iter()
@@ -181,6 +182,18 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
             100.0 * misfit.fraction,
             misfit.worst_inflation
         );
+    }
+}
+
+/// The tone curve, when one was undone or estimated far from linear.
+fn print_tone(m: &Measurement) {
+    match (m.tone, m.tone_estimate) {
+        (t, Some(e)) if !t.is_identity() => println!(
+            "tone:        read from the edge as {t} (power law {:.3}, evidence {:.0} noise variances); measured again in linear light, about {:+.3} px along the normals; sigma includes the reading's uncertainty, {:.1e} px for the whole curve (--tone CURVE if you know it)",
+            e.gamma, e.evidence, e.shift, e.position_sd
+        ),
+        (t, _) if !t.is_identity() => println!("tone:        {t} undone before measuring"),
+        _ => {}
     }
 }
 

@@ -599,3 +599,52 @@ fn a_closed_output_pipe_is_not_a_panic() {
     let stderr = text(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// An sRGB-encoded disc: `measure` finds the encoding (the JSON's `tone`
+/// and `tone_estimate`, a summary line), `--tone srgb` undoes it as told,
+/// and a tone that is not one gets one line and exit 1.
+#[test]
+fn an_encoded_image_is_measured_in_linear_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let img = p(d, "srgb.png");
+    let out = vicurve(&[
+        "synth", "disc", "--size", "200x200", "--radius", "60", "--blur", "1", "--noise", "0.01",
+        "--tone", "srgb", "--out", &img,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json = p(d, "r.json");
+    let record = |args: &[&str]| -> serde_json::Value {
+        let mut all = vec![
+            "measure",
+            &img,
+            "--init",
+            "circle:100,99,60",
+            "--out",
+            &json,
+        ];
+        all.extend_from_slice(args);
+        let out = vicurve(&all);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+    };
+    // The summary says what was read and how sure it is.
+    let out = vicurve(&["measure", &img, "--init", "circle:100,99,60"]);
+    assert!(
+        text(&out.stdout).contains("tone:        read from the edge"),
+        "{}",
+        text(&out.stdout)
+    );
+    let auto = record(&[]);
+    assert_ne!(auto["tone"], "linear", "{}", auto["tone"]);
+    assert!(auto["tone_estimate"]["evidence"].as_f64().unwrap() > 25.0);
+    assert_eq!(auto["config"]["tone"], "auto");
+    let told = record(&["--tone", "srgb"]);
+    assert_eq!(told["tone"], "srgb");
+    assert!(told["tone_estimate"].is_null());
+    assert_error(
+        &vicurve(&["measure", &img, "--init", "circle:100,99,60", "--tone", "9"]),
+        1,
+        "--tone",
+    );
+}

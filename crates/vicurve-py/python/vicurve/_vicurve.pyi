@@ -147,6 +147,12 @@ class Result:
     def edge_spread(self) -> Optional[Dict[str, Any]]:
         """sigma, line_width, fit_quality, pixels of the estimated blur, or None."""
     @property
+    def tone(self) -> Union[str, Dict[str, float]]:
+        """The tone curve the gray levels were read with: "linear", "srgb" or {"gamma": g}."""
+    @property
+    def tone_estimate(self) -> Optional[Dict[str, Any]]:
+        """curve, gamma, shift, evidence, position_sd, pixels of the tone estimate, or None."""
+    @property
     def blur_corrected(self) -> bool: ...
     @property
     def polarity(self) -> str:
@@ -186,6 +192,7 @@ def measure(
     breaks: Optional[Sequence[float]] = None,
     grow: Union[bool, float, None] = None,
     find_corners: bool = True,
+    tone: str = "auto",
 ) -> Result:
     """Measure the curve in ``image`` starting from ``init``.
 
@@ -234,6 +241,7 @@ def synth(
     seed: int = 1,
     bits: Optional[int] = 8,
     levels: Optional[Tuple[float, float]] = None,
+    tone: str = "linear",
 ) -> Tuple[npt.NDArray[Any], Dict[str, Any]]:
     """Render a test image of exactly known geometry, as ``vicurve synth``.
 
@@ -317,6 +325,7 @@ def track(
     out_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
     force: bool = False,
     progress: bool = True,
+    tone: str = "auto",
 ) -> Tracker:
     """Track a curve through ``frames`` (3-D array, arrays or paths, a glob,
     a multi-page TIFF), each frame started from the previous result as

@@ -5,6 +5,7 @@ pub use crate::band::Coords;
 use crate::error::{Error, Result};
 use crate::fit::levels::LevelModel;
 use crate::interp::Interpolation;
+use crate::tone::Tone;
 use crate::virtual_image::Kind;
 pub use crate::virtual_image::Polarity;
 use serde::{Deserialize, Serialize};
@@ -167,6 +168,13 @@ pub struct FitConfig {
     /// [`crate::measurement::Measurement::corners_found`] says where).
     /// Not when `breaks` are given or the start has corners. Default: true.
     pub find_corners: bool,
+    /// How the image's gray levels relate to the light ([`Tone`]): with
+    /// [`Tone::Auto`] a silhouette's tone curve is estimated around the
+    /// measured edge and, when the image is clearly not linear (a power
+    /// law such as an sRGB encoding), the edge is measured again on the
+    /// image taken back to linear light; an explicit tone curve is undone
+    /// before measuring. Default: auto.
+    pub tone: Tone,
 }
 
 impl Default for FitConfig {
@@ -187,6 +195,7 @@ impl Default for FitConfig {
             levels: LevelModel::default(),
             breaks: Vec::new(),
             find_corners: true,
+            tone: Tone::Auto,
         }
     }
 }
@@ -195,6 +204,7 @@ impl FitConfig {
     /// Check every field; errors name the field and the accepted range.
     pub fn validate(&self) -> Result<()> {
         self.levels.validate()?;
+        self.tone.validate()?;
         if !(1..=crate::spline::MAX_DEGREE).contains(&self.degree) {
             return Err(Error::invalid(
                 "degree",

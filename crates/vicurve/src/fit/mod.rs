@@ -65,6 +65,7 @@ mod run;
 mod schedule;
 mod settle;
 mod stage;
+mod tone;
 mod track;
 
 pub use crate::correlation::levels::{self, LevelModel};
@@ -84,6 +85,7 @@ use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::Sampler;
+use crate::tone::Tone;
 use crate::virtual_image::Kind;
 use blur::{pixel_edge_band, BLUR_TOLERANCE};
 use schedule::run_schedule;
@@ -103,7 +105,39 @@ pub fn measure(image: &Image, init: &InitialCurve, config: &FitConfig) -> Result
 
 /// [`measure`] with a prepared image sampler and reference curve (for
 /// sequences and benchmarks: the sampler's prefilter is done once).
+///
+/// The image's tone curve ([`FitConfig::tone`]): an explicit one is undone
+/// on a copy of the image first; [`Tone::Auto`] measures the image as it
+/// is, estimates the tone curve around a silhouette's edge, and measures
+/// again on the image in linear light when it is clearly not linear
+/// (`fit/tone.rs`; the result's [`Measurement::tone`] and
+/// [`Measurement::tone_estimate`] say what was done).
 pub fn measure_from(
+    sampler: &Sampler,
+    reference: SplineCurve,
+    config: &FitConfig,
+) -> Result<Measurement> {
+    if !config.tone.is_identity() {
+        let linear = tone::linear_sampler(sampler, config.tone)?;
+        let mut m = measure_as_linear(&linear, reference, config)?;
+        m.tone = config.tone;
+        return Ok(m);
+    }
+    let m = measure_as_linear(sampler, reference.clone(), config)?;
+    if config.tone != Tone::Auto {
+        return Ok(m);
+    }
+    Ok(tone::with_estimate(
+        sampler,
+        reference,
+        m,
+        config.kind,
+        |s, r| measure_as_linear(s, r, config),
+    ))
+}
+
+/// [`measure_from`] on gray levels taken as proportional to the light.
+fn measure_as_linear(
     sampler: &Sampler,
     reference: SplineCurve,
     config: &FitConfig,

@@ -24,6 +24,7 @@ use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::interp::Sampler;
 use crate::psf;
+use crate::tone::Tone;
 use crate::virtual_image::pixel_edge::optical_blur;
 use crate::virtual_image::{Kind, Polarity, Profile};
 use std::f64::consts::TAU;
@@ -428,6 +429,8 @@ impl<'s> Schedule<'s> {
                 trim: Trim::default(),
                 levels: Vec::new(),
                 corners_found: Vec::new(),
+                tone: Tone::Linear,
+                tone_estimate: None,
             });
         };
         let ends = [0.0, fin.reference.param_length()].map(|u| fin.reference.point(u));
@@ -476,6 +479,8 @@ impl<'s> Schedule<'s> {
             blur_corrected: blur.is_some() || pixel_edge_result,
             levels,
             corners_found: Vec::new(),
+            tone: Tone::Linear,
+            tone_estimate: None,
         })
     }
 

@@ -53,6 +53,7 @@ use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::image::Image;
 use crate::interp::{Interpolation, Sampler};
+use crate::tone::Tone;
 use crate::virtual_image::{Kind, Profile};
 use serde::{Deserialize, Serialize};
 
@@ -67,6 +68,15 @@ pub struct TrackState {
     /// Whether the gray levels were a global pair (not varying along the
     /// curve).
     pub global_levels: bool,
+    /// The tone curve the measurement read the gray levels with (see
+    /// [`Measurement::tone`]): the next frames are read with it unless the
+    /// configuration gives one.
+    #[serde(default = "linear_tone")]
+    pub tone: Tone,
+}
+
+fn linear_tone() -> Tone {
+    Tone::Linear
 }
 
 impl TrackState {
@@ -107,13 +117,19 @@ impl TrackState {
             blur,
             element_length: curve_length / elements as f64,
             global_levels: !levels_vary,
+            tone: Tone::Linear,
         };
         (outcome.is_converged() && elements > 0 && state.usable()).then_some(state)
     }
 
     /// [`TrackState::from_stages`] of a measurement.
     pub fn from_measurement(m: &Measurement) -> Option<TrackState> {
-        TrackState::from_stages(&m.stages, m.curve.param_length(), !m.levels.is_empty())
+        TrackState::from_stages(&m.stages, m.curve.param_length(), !m.levels.is_empty()).map(
+            |state| TrackState {
+                tone: m.tone,
+                ..state
+            },
+        )
     }
 
     /// The one stage of the tracking schedule.
@@ -201,10 +217,26 @@ fn measure_tracked_inner(
     if state.global_levels {
         config.levels = LevelModel::Global;
     }
-    let m = match run_schedule(sampler, start, &config, Some((*state, cache))) {
+    // The tone curve: the configuration's, else the previous frame's.
+    let tone = if config.tone.is_identity() {
+        state.tone
+    } else {
+        config.tone
+    };
+    let linear;
+    let sampler = if tone.is_identity() {
+        sampler
+    } else {
+        linear = super::tone::linear_sampler(sampler, tone)?;
+        &linear
+    };
+    let mut m = match run_schedule(sampler, start, &config, Some((*state, cache))) {
         Ok(m) => m,
         Err(_) => return Ok(None),
     };
+    if !tone.is_identity() {
+        m.tone = tone;
+    }
     let done = m.outcome == Outcome::Converged
         && m.stages.len() == 1
         && matches!(m.stages[0].profile, Profile::PixelEdge { .. });

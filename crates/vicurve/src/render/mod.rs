@@ -26,6 +26,7 @@ mod truth_file;
 
 pub use truth_file::Truth;
 
+use crate::tone::Tone;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -82,6 +83,13 @@ pub struct RenderSpec {
     /// `Some(8)` or `Some(16)`: quantise like an integer image of that depth
     /// (values stay real numbers in `[0, 1]`); `None`: keep full precision.
     pub bits: Option<u8>,
+    /// How the recorded gray levels encode the light: `foreground` and
+    /// `background` are light, blurred and integrated as such, and each
+    /// pixel is then encoded by this tone curve (sRGB, a gamma) before
+    /// the noise (a fraction of the encoded contrast) and the
+    /// quantisation, as a camera writing JPEG files does. Default: linear
+    /// ([`Tone::Auto`] is linear too).
+    pub tone: Tone,
 }
 
 impl Default for RenderSpec {
@@ -105,6 +113,7 @@ impl Default for RenderSpec {
             noise: 0.0,
             seed: 0,
             bits: None,
+            tone: Tone::Linear,
         }
     }
 }
@@ -232,7 +241,8 @@ impl RenderSpec {
 /// ([`blur::gaussian_blur`]), value `background + (foreground -
 /// background) * fraction`; then noise of standard
 /// deviation `noise * |foreground - background|` ([`noise::add_gaussian_noise`]);
-/// then quantisation ([`noise::quantise`]) if `bits` is set.
+/// then quantisation ([`noise::quantise`]) if `bits` is set. With a
+/// `tone`, the values are encoded by it before the noise.
 ///
 /// Errors: those of [`RenderSpec::validate`].
 pub fn render(spec: &RenderSpec) -> Result<Image> {

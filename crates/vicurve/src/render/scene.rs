@@ -12,6 +12,7 @@
 use super::{blur, noise, shapes, Method, RenderSpec};
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::tone::Tone;
 use crate::truth::{Kind, Shape};
 use noise::Rng;
 use serde::{Deserialize, Serialize};
@@ -63,6 +64,14 @@ pub struct Rendering {
     pub seed: u64,
     /// Quantisation, 8 or 16 bits, or none.
     pub bits: Option<u8>,
+    /// The tone curve that encodes the light (see
+    /// [`super::RenderSpec::tone`]); linear when absent.
+    #[serde(default = "linear_tone")]
+    pub tone: Tone,
+}
+
+fn linear_tone() -> Tone {
+    Tone::Linear
 }
 
 impl Rendering {
@@ -76,6 +85,7 @@ impl Rendering {
             noise: 0.01,
             seed,
             bits: Some(8),
+            tone: Tone::Linear,
         }
     }
 
@@ -88,6 +98,7 @@ impl Rendering {
             noise: spec.noise,
             seed: spec.seed,
             bits: spec.bits,
+            tone: spec.tone,
         }
     }
 }
@@ -157,7 +168,13 @@ pub(super) fn paint(
 /// `image` with the noise and the quantisation of `r` (its blur is
 /// already in it).
 pub(super) fn finish(mut image: Image, r: &Rendering) -> Image {
-    let contrast = (r.foreground - r.background).abs();
+    let mut contrast = (r.foreground - r.background).abs();
+    if !r.tone.is_identity() {
+        for v in image.data_mut() {
+            *v = r.tone.from_linear(*v);
+        }
+        contrast = (r.tone.from_linear(r.foreground) - r.tone.from_linear(r.background)).abs();
+    }
     noise::add_gaussian_noise(image.data_mut(), r.noise * contrast, r.seed);
     if let Some(bits) = r.bits {
         noise::quantise(image.data_mut(), bits);

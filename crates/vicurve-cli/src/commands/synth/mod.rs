@@ -8,6 +8,7 @@ use crate::args::synth::{check_bits, numbers, parse_size, ShapeName, DEFAULT_LEV
 use crate::failure::Failure;
 use vicurve::render::Truth;
 use vicurve::render::{presets, render, Method, RenderSpec};
+use vicurve::tone::Tone;
 use vicurve::truth::Shape;
 use vicurve::virtual_image::Kind;
 
@@ -48,6 +49,10 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
     let (w, h) = parse_size(a.size.as_deref().unwrap_or("512x512"))?;
     let (blur, noise) = (a.blur.unwrap_or(0.0), a.noise.unwrap_or(0.0));
     let levels = numbers("levels", &a.levels, ',', 2)?;
+    let tone: Tone = a
+        .tone
+        .parse()
+        .map_err(|e| Failure::Error(format!("--tone: {e}")))?;
     if a.shape == ShapeName::PaperDisc {
         // The preset (512x512, levels 0 and 1 unless given), with the
         // user's radius, profile, blur, noise and depth on top.
@@ -62,6 +67,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         spec.noise = noise;
         spec.seed = a.seed;
         spec.bits = Some(bits);
+        spec.tone = tone;
         spec.validate()?;
         return Ok(spec);
     }
@@ -146,6 +152,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         noise,
         seed: a.seed,
         bits: Some(bits),
+        tone,
     };
     spec.validate()?;
     Ok(spec)

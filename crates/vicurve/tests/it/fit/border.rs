@@ -45,6 +45,7 @@ fn image_spec(kind: Kind, seed: u64) -> RenderSpec {
         noise: 0.01,
         seed,
         bits: Some(8),
+        tone: vicurve::tone::Tone::Linear,
     }
 }
 

@@ -21,6 +21,7 @@ mod settle;
 mod sharp;
 mod sigma;
 mod stage;
+mod tone;
 mod track;
 mod uncertainty;
 

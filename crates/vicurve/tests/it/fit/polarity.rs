@@ -30,6 +30,7 @@ fn ring(line: f64, ground: f64, blur: f64, noise: f64, seed: u64) -> RenderSpec 
         noise,
         seed,
         bits: Some(8),
+        tone: vicurve::tone::Tone::Linear,
     }
 }
 

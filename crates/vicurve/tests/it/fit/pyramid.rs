@@ -87,6 +87,7 @@ fn a_thin_line_is_found_through_the_binned_stages() {
         noise: 0.02,
         seed: 7,
         bits: Some(8),
+        tone: vicurve::tone::Tone::Linear,
     };
     let init = InitialCurve::Circle {
         cx: cx + 9.0,

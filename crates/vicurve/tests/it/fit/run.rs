@@ -56,6 +56,7 @@ fn an_overshooting_run_converges_in_a_few_iterations() {
         noise: 0.02,
         seed: 5,
         bits: Some(8),
+        tone: vicurve::tone::Tone::Linear,
     };
     let config = FitConfig {
         kind: Kind::Contour,

@@ -35,6 +35,7 @@ fn blurred_line_image(
         noise: 0.02,
         seed: 3,
         bits: Some(8),
+        tone: vicurve::tone::Tone::Linear,
     })
     .unwrap()
 }

@@ -8,6 +8,7 @@
 //! chosen per case.
 
 use vicurve::render::{Kind, Method, RenderSpec};
+use vicurve::tone::Tone;
 use vicurve::truth::Shape;
 
 /// Side of the sweep's images, px.
@@ -21,6 +22,10 @@ pub const NOISES: [f64; 4] = [0.0, 0.01, 0.02, 0.05];
 
 /// Width of the thin lines (contours), px.
 pub const LINE_WIDTH: f64 = 2.5;
+
+/// The tone curves of the encoded images (JPEG files, renderers' sRGB
+/// output): the light of the other images, encoded before the noise.
+pub const TONES: [Tone; 2] = [Tone::Srgb, Tone::Gamma(2.2)];
 
 /// The paper's three stages, used by half the far-start stars.
 pub const PAPER_STAGES: &str = "20:25,10:50,5:100";
@@ -176,6 +181,8 @@ pub struct ImageCase {
     pub blur: f64,
     /// Noise, fraction of the contrast.
     pub noise: f64,
+    /// The tone curve encoding the light (linear for most).
+    pub tone: Tone,
     /// The image to render (its shape is the truth).
     pub spec: RenderSpec,
 }
@@ -234,15 +241,19 @@ fn num(v: f64) -> String {
     format!("{v}")
 }
 
-/// The id of an image.
-fn image_id(shape: ShapeName, blur: f64, noise: f64, bits: u8, bright: bool) -> String {
-    format!(
+/// The id of an image; an encoded one's ends in its tone curve.
+fn image_id(shape: ShapeName, blur: f64, noise: f64, bits: u8, bright: bool, tone: Tone) -> String {
+    let mut id = format!(
         "{}/blur{}/noise{}/{bits}bit/{}",
         shape.name(),
         num(blur),
         num((noise * 100.0 * 1e6).round() / 1e6),
         if bright { "bright" } else { "dark" }
-    )
+    );
+    if !tone.is_identity() {
+        id.push_str(&format!("/{tone}"));
+    }
+    id
 }
 
 /// The true curve of `shape`, its centre moved off the grid by the
@@ -291,7 +302,19 @@ fn true_shape(shape: ShapeName, rng: &mut Rng, width: usize, height: usize) -> S
 
 /// The image of `shape` under the given conditions.
 pub fn image_case(shape: ShapeName, blur: f64, noise: f64, bits: u8, bright: bool) -> ImageCase {
-    let id = image_id(shape, blur, noise, bits, bright);
+    encoded_case(shape, blur, noise, bits, bright, Tone::Linear)
+}
+
+/// [`image_case`] with its light encoded by `tone`.
+pub fn encoded_case(
+    shape: ShapeName,
+    blur: f64,
+    noise: f64,
+    bits: u8,
+    bright: bool,
+    tone: Tone,
+) -> ImageCase {
+    let id = image_id(shape, blur, noise, bits, bright, tone);
     let (width, height) = match shape {
         ShapeName::FarStar { .. } => (1704, 2272),
         _ => (SIZE, SIZE),
@@ -312,6 +335,7 @@ pub fn image_case(shape: ShapeName, blur: f64, noise: f64, bits: u8, bright: boo
         noise,
         seed: seed_of(&id),
         bits: Some(bits),
+        tone,
     };
     ImageCase {
         id,
@@ -320,6 +344,7 @@ pub fn image_case(shape: ShapeName, blur: f64, noise: f64, bits: u8, bright: boo
         bits,
         blur,
         noise,
+        tone,
         spec,
     }
 }
@@ -349,6 +374,28 @@ fn full_sweep() -> Vec<Case> {
             }
         }
     }
+    out.extend(encoded_sweep());
+    out
+}
+
+/// The silhouettes' images encoded by each of [`TONES`], at the blurs of
+/// an ordinary camera (1 and 2 px) and 1 % noise, 8 bits, both
+/// polarities, with every start.
+fn encoded_sweep() -> Vec<Case> {
+    let mut out = Vec::new();
+    for shape in ShapeName::SWEEP {
+        if shape.kind() != Kind::Silhouette {
+            continue;
+        }
+        for tone in TONES {
+            for blur in [1.0, 2.0] {
+                for bright in [true, false] {
+                    let image = encoded_case(shape, blur, 0.01, 8, bright, tone);
+                    out.extend(with_starts(&image, None));
+                }
+            }
+        }
+    }
     out
 }
 
@@ -370,6 +417,21 @@ fn ci_sweep() -> Vec<Case> {
                 k += 1;
             }
         }
+    }
+    // An encoded edge of each kind: a closed one and one crossing the
+    // image.
+    for (shape, tone, blur, bright, start) in [
+        (ShapeName::Disc, Tone::Srgb, 1.0, true, Start::Circle1_5),
+        (
+            ShapeName::SineEdge,
+            Tone::Gamma(2.2),
+            2.0,
+            false,
+            Start::Polyline1_5,
+        ),
+    ] {
+        let image = encoded_case(shape, blur, 0.01, 8, bright, tone);
+        out.push(case(&image, start, None));
     }
     out
 }

@@ -32,7 +32,8 @@ const NEAR: f64 = 1.0;
 pub struct Row {
     /// Stable readable id: `shape/blurB/noiseN/Dbit/polarity/start[/paper-stages]`.
     pub id: String,
-    /// Shape name.
+    /// Shape name; an encoded image's is followed by its tone curve
+    /// (`disc srgb`), so that the report counts them apart.
     pub shape: String,
     /// `silhouette` or `contour`.
     pub kind: String,
@@ -280,7 +281,11 @@ fn row(case: &Case, outcome: &str, message: String, f: Figures, seconds: f64) ->
     };
     Row {
         id: case.id.clone(),
-        shape: img.shape.name(),
+        shape: if img.tone.is_identity() {
+            img.shape.name()
+        } else {
+            format!("{} {}", img.shape.name(), img.tone)
+        },
         kind: format!("{:?}", img.shape.kind()).to_lowercase(),
         polarity: if img.bright { "bright" } else { "dark" }.into(),
         bits: img.bits,
