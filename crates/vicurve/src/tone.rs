@@ -223,7 +223,7 @@ const CONSISTENT: f64 = 4.0;
 /// orientations, curvature, uneven levels) whose encoded mean is not the
 /// encoding of their mean: a noiseless 8-bit disc of true gamma 2.2 was
 /// read as 1.95 (15 % of `ln gamma`), which left its edge 0.058 px off.
-const FITTED_SYSTEMATIC: f64 = 0.25;
+pub(crate) const FITTED_SYSTEMATIC: f64 = 0.25;
 
 /// The estimate chooses a tone curve other than linear when the power law
 /// explains this many noise variances more than a linear tone (a
@@ -235,7 +235,7 @@ const EVIDENCE: f64 = 25.0;
 /// 2.43), while the other asymmetries of linear images read as 0.63 to
 /// 1.28 (motion blur, astigmatism, uneven light; docs/benchmarks.md,
 /// "Gamma-encoded images").
-const LEAST_GAMMA: f64 = 1.5;
+pub(crate) const LEAST_GAMMA: f64 = 1.5;
 /// The profile misfits when the power law's residual variance exceeds the
 /// neighbouring pixels' noise this many times...
 const MISFIT: f64 = 2.0;
@@ -306,8 +306,9 @@ pub fn estimate(data: &[(f64, f64)], spread: f64) -> Option<ToneEstimate> {
     let mut start = [0.0; UNKNOWNS];
     start[0] = mean.max(LIGHT_FLOOR);
     let with = |free, fixed| ProfileFit { free, fixed, ..fit };
-    let linear = with([true, false], None).minimise(start)?;
-    let power = with([true, true], None).minimise(linear.0)?;
+    // The linear fit is the reference of the evidence: it must settle.
+    let linear = with([true, false], None).minimise(start, true)?;
+    let power = with([true, true], None).minimise(linear.0, false)?;
     // The noise: that of neighbouring pixels, or the power law's own
     // residual variance where the profile misfits more (a blur the sum of
     // bumps cannot follow, the rounding of a noiseless image's levels,
@@ -371,7 +372,7 @@ fn choose<'a>(
     let candidates: Vec<(Tone, f64, f64)> = STANDARD_TONES
         .iter()
         .filter_map(|&tone| {
-            let fit = with([true, false], Some(tone)).minimise(start)?;
+            let fit = with([true, false], Some(tone)).minimise(start, false)?;
             Some((tone, fit.1, fit.0[R0]))
         })
         .chain(std::iter::once((fitted, rss, point[R0])))
@@ -459,16 +460,21 @@ struct Eval {
 impl ProfileFit<'_> {
     /// The minimum from `start` and its residual sum of squares (that of
     /// the pixels, the spread within each bin included); `None` when the
-    /// fit does not converge.
-    fn minimise(&self, start: [f64; UNKNOWNS]) -> Option<([f64; UNKNOWNS], f64)> {
+    /// fit does not converge, or, when `settled` is false, also a fit at
+    /// its iteration limit, where it stands (its cost only fell: a power
+    /// law's evidence from it is at most the converged one's; the bumps of
+    /// a small object's band, about 700 pixels, can take more than 100
+    /// steps to settle to 1e-7).
+    fn minimise(&self, start: [f64; UNKNOWNS], settled: bool) -> Option<([f64; UNKNOWNS], f64)> {
         let eval = self.eval(&start)?;
         let params = LmParams {
-            max_iterations: 60,
+            max_iterations: 100,
             ..LmParams::default()
         };
         let min = lm::minimise(self, start, eval, &params);
         match min.end {
             lm::End::Converged | lm::End::Stalled => {}
+            lm::End::IterationLimit if !settled => {}
             lm::End::IterationLimit | lm::End::Stopped(()) => return None,
         }
         let within: f64 = self

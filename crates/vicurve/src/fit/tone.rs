@@ -13,21 +13,29 @@ use crate::measurement::{Measurement, Outcome};
 use crate::psf;
 use crate::tone::{self, Tone, ToneEstimate};
 use crate::virtual_image::Kind;
+use std::sync::Arc;
 
 /// Band pixels the estimate reads at most (a regular subsample, see
 /// `estimate`): its fit sums them by distance to the curve, so they cost
 /// only the band's building.
 const TONE_PIXELS: usize = 40_000;
 
-/// `sampler`'s image taken to linear light by `tone`, prepared like it.
+/// `sampler`'s image taken to linear light by `tone`, prepared like it;
+/// made once per sampler and tone curve ([`Sampler::linear`]).
 ///
 /// Errors: [`Error::InvalidParameter`] when `sampler` has no pixels of its
 /// own (a binned level of an image).
-pub(super) fn linear_sampler(sampler: &Sampler, tone: Tone) -> Result<Sampler> {
-    let pixels = sampler.image_pixels();
-    let image = Image::new_finite(sampler.width(), sampler.height(), pixels.to_vec())
-        .map_err(|_| Error::invalid("tone", "the image's own pixels are not at hand"))?;
-    Ok(Sampler::new(&tone.linearise(&image), sampler.kind()))
+pub(super) fn linear_sampler(sampler: &Sampler, tone: Tone) -> Result<Arc<Sampler>> {
+    sampler.linear(tone, || {
+        let light = sampler
+            .image_pixels()
+            .iter()
+            .map(|&v| tone.to_linear(v))
+            .collect();
+        let image = Image::new_finite(sampler.width(), sampler.height(), light)
+            .map_err(|_| Error::invalid("tone", "the image's own pixels are not at hand"))?;
+        Ok(Sampler::new(&image, sampler.kind()))
+    })
 }
 
 /// `m` (measured from `reference` on `sampler` by `measure`) with the tone

@@ -228,7 +228,7 @@ fn measure_tracked_inner(
         sampler
     } else {
         linear = super::tone::linear_sampler(sampler, tone)?;
-        &linear
+        &*linear
     };
     let mut m = match run_schedule(sampler, start, &config, Some((*state, cache))) {
         Ok(m) => m,

@@ -21,6 +21,7 @@ use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::tone::Tone;
 
 mod prefilter;
 
@@ -143,7 +144,18 @@ pub struct Sampler {
     quantum: Arc<std::sync::OnceLock<Option<f64>>>,
     /// [`Sampler::pixel_noise`], likewise.
     pixel_noise: Arc<std::sync::OnceLock<f64>>,
+    /// [`Sampler::linear`]: the samplers of the image in linear light made
+    /// so far, by tone curve, shared by clones.
+    linear: Arc<std::sync::Mutex<LinearSamplers>>,
 }
+
+/// [`Sampler::linear`]'s list: each tone curve with its sampler.
+type LinearSamplers = Vec<(Tone, Arc<Sampler>)>;
+
+/// Samplers of an image in linear light [`Sampler::linear`] keeps at most
+/// (each a copy of the image): one for an explicit tone curve, or the few
+/// an image's objects read.
+const LINEAR_KEPT: usize = 2;
 
 impl Sampler {
     /// Prepares `image` for interpolation of the given kind: `O(w h)` time,
@@ -215,7 +227,32 @@ impl Sampler {
             range: Arc::default(),
             quantum: Arc::default(),
             pixel_noise: Arc::default(),
+            linear: Arc::default(),
         }
+    }
+
+    /// The sampler of this image in linear light by `tone`, made by `make`
+    /// the first time and kept for this sampler and its clones (the
+    /// objects of one image, a grown edge's steps measure on the same
+    /// one), the last [`LINEAR_KEPT`] tone curves.
+    ///
+    /// Errors: those of `make`.
+    pub(crate) fn linear(
+        &self,
+        tone: Tone,
+        make: impl FnOnce() -> crate::error::Result<Sampler>,
+    ) -> crate::error::Result<Arc<Sampler>> {
+        // A panic elsewhere while holding the lock leaves a usable list.
+        let mut kept = self.linear.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, s)) = kept.iter().find(|(t, _)| *t == tone) {
+            return Ok(Arc::clone(s));
+        }
+        let made = Arc::new(make()?);
+        if kept.len() == LINEAR_KEPT {
+            kept.remove(0);
+        }
+        kept.push((tone, Arc::clone(&made)));
+        Ok(made)
     }
 
     /// The interpolation kind.

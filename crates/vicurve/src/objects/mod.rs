@@ -55,6 +55,7 @@ mod measure;
 pub mod order;
 pub mod square_grid;
 pub mod table;
+mod tone;
 
 pub use find::{Candidate, Found};
 pub use grid::{grid_strains, GridStrain};
@@ -367,10 +368,13 @@ pub fn measure_all(image: &Image, config: &AllConfig) -> Result<AllResult> {
     let found = find::find_objects(image, config)?;
     // The image's interpolant, prepared once for every object.
     let sampler = Sampler::new(image, config.fit.interpolation);
-    let objects = found
+    let mut objects = found
         .candidates
         .par_iter()
         .map(|c| measure::measure_one(image, &sampler, c, config))
         .collect();
+    if config.fit.tone == crate::tone::Tone::Auto {
+        objects = tone::agreed(image, &sampler, &found.candidates, objects, config);
+    }
     Ok(AllResult { objects, found })
 }

@@ -6,6 +6,7 @@
 //! light, and `sigma` covers what the estimate leaves uncertain.
 
 use vicurve::curve::InitialCurve;
+use vicurve::derived::closed_measures;
 use vicurve::fit::{measure, measure_tracked, FitConfig, Measurement, TrackState};
 use vicurve::render::{render, RenderSpec};
 use vicurve::tone::Tone;
@@ -81,6 +82,19 @@ fn an_encoded_edge_is_measured_in_linear_light() {
         assert!(
             bias.abs() < 0.05 && bias.abs() < 3.0 * sigma,
             "{bias} {sigma}"
+        );
+        // The radius carries the reading's uncertainty, common to every
+        // sample (the circle fit alone, from its residuals, cannot see it).
+        let circle = closed_measures(&m).unwrap().circle;
+        println!(
+            "  radius {:+.4} +- {:.4} px",
+            circle.r - 150.0,
+            circle.sigma_r
+        );
+        assert!(circle.sigma_r >= e.position_sd, "{circle:?}");
+        assert!(
+            (circle.r - 150.0).abs() < 3.0 * circle.sigma_r,
+            "{circle:?}"
         );
     }
 }
