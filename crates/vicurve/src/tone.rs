@@ -11,11 +11,11 @@
 //! images"), with a `sigma` that knows nothing of it.
 //!
 //! [`estimate`] reads the exponent from the profile's asymmetry around a
-//! measured curve; [`Tone::linearise`] takes an image back to linear light,
-//! where the method measures without that bias.
+//! measured curve; [`Tone::to_linear`] takes gray levels back to linear
+//! light, where the method measures without that bias
+//! ([`crate::fit::FitConfig::tone`]).
 
 use crate::error::{Error, Result};
-use crate::image::Image;
 use crate::psf::{noise_variance, Binned};
 use crate::solver::lm::{self, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
@@ -117,20 +117,16 @@ impl Tone {
         }
     }
 
+    /// [`Tone::Linear`]: the serde default of the records written before
+    /// the tone curve was one of their fields.
+    pub(crate) fn linear() -> Tone {
+        Tone::Linear
+    }
+
     /// Whether gray levels are taken as they are ([`Tone::Linear`], or
     /// [`Tone::Auto`] before an estimate).
     pub fn is_identity(self) -> bool {
         matches!(self, Tone::Auto | Tone::Linear)
-    }
-
-    /// `image` in linear light: every pixel through [`Tone::to_linear`]; a
-    /// copy of `image` for the identity.
-    pub fn linearise(self, image: &Image) -> Image {
-        if self.is_identity() {
-            return image.clone();
-        }
-        let data = image.data().iter().map(|&v| self.to_linear(v)).collect();
-        Image::new_finite(image.width(), image.height(), data).unwrap_or_else(|_| image.clone())
     }
 }
 

@@ -123,10 +123,10 @@ pub fn measure_from(
         m.tone = config.tone;
         return Ok(m);
     }
-    let m = measure_as_linear(sampler, reference.clone(), config)?;
     if config.tone != Tone::Auto {
-        return Ok(m);
+        return measure_as_linear(sampler, reference, config);
     }
+    let m = measure_as_linear(sampler, reference.clone(), config)?;
     Ok(tone::with_estimate(
         sampler,
         reference,

@@ -71,12 +71,8 @@ pub struct TrackState {
     /// The tone curve the measurement read the gray levels with (see
     /// [`Measurement::tone`]): the next frames are read with it unless the
     /// configuration gives one.
-    #[serde(default = "linear_tone")]
+    #[serde(default = "Tone::linear")]
     pub tone: Tone,
-}
-
-fn linear_tone() -> Tone {
-    Tone::Linear
 }
 
 impl TrackState {

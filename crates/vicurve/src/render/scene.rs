@@ -66,12 +66,8 @@ pub struct Rendering {
     pub bits: Option<u8>,
     /// The tone curve that encodes the light (see
     /// [`super::RenderSpec::tone`]); linear when absent.
-    #[serde(default = "linear_tone")]
+    #[serde(default = "Tone::linear")]
     pub tone: Tone,
-}
-
-fn linear_tone() -> Tone {
-    Tone::Linear
 }
 
 impl Rendering {
