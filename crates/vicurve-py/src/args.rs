@@ -121,8 +121,10 @@ pub struct SynthArgs {
     pub line: Option<f64>,
     /// Render with the virtual profile of this half-width.
     pub profile: Option<f64>,
-    /// Gaussian blur, pixels.
+    /// Gaussian blur, pixels (along the rows when `blur_y` is given).
     pub blur: f64,
+    /// The blur along the columns when it differs, pixels.
+    pub blur_y: Option<f64>,
     /// Noise, fraction of the contrast.
     pub noise: f64,
     /// Seed of the noise.
@@ -153,6 +155,7 @@ impl SynthArgs {
             line: None,
             profile: None,
             blur: 0.0,
+            blur_y: None,
             noise: 0.0,
             seed: 1,
             bits: Some(8),
@@ -193,6 +196,7 @@ pub fn synth_spec(a: &SynthArgs) -> Result<RenderSpec, vicurve::Error> {
             (spec.background, spec.foreground) = (bg, fg);
         }
         spec.blur_sigma = a.blur;
+        spec.blur_sigma_y = a.blur_y;
         spec.noise = a.noise;
         spec.seed = a.seed;
         spec.bits = a.bits;
@@ -259,6 +263,7 @@ pub fn synth_spec(a: &SynthArgs) -> Result<RenderSpec, vicurve::Error> {
             None => Method::Coverage,
         },
         blur_sigma: a.blur,
+        blur_sigma_y: a.blur_y,
         noise: a.noise,
         seed: a.seed,
         bits: a.bits,

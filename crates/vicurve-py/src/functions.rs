@@ -302,7 +302,9 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
 /// (ellipse), `angle`, `amplitude` (star: relative; sine: pixels), `lobes`,
 /// `phase`, `wavelength`, `y0`, `line` (full width of a line: a contour),
 /// `profile` (draw with the virtual profile of this half-width instead of
-/// exact pixel coverage), `blur` (Gaussian, sigma), `noise` (standard
+/// exact pixel coverage), `blur` (Gaussian, sigma), `blur_y` (the blur
+/// along the columns when it differs: `blur` is then along the rows; exact
+/// coverage only), `noise` (standard
 /// deviation as a fraction of the contrast), `seed`, `bits` (8: uint8, 16:
 /// uint16, None: float64 without quantisation), `levels=(background,
 /// foreground)` in [0, 1] (0.2, 0.8), `tone` (the tone curve that
@@ -316,9 +318,9 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
 #[pyo3(signature = (
     shape, *, size = (512, 512), center = None, radius = None, axes = None,
     angle = 20.0, amplitude = None, lobes = 5, phase = 0.0, wavelength = None,
-    y0 = None, line = None, profile = None, blur = 0.0, noise = 0.0, seed = 1,
-    bits = Some(8), levels = None, tone = "linear"
-), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, noise=0.0, seed=1, bits=8, levels=None, tone='linear')")]
+    y0 = None, line = None, profile = None, blur = 0.0, blur_y = None, noise = 0.0,
+    seed = 1, bits = Some(8), levels = None, tone = "linear"
+), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, blur_y=None, noise=0.0, seed=1, bits=8, levels=None, tone='linear')")]
 #[allow(clippy::too_many_arguments)]
 pub fn synth<'py>(
     py: Python<'py>,
@@ -336,6 +338,7 @@ pub fn synth<'py>(
     line: Option<f64>,
     profile: Option<f64>,
     blur: f64,
+    blur_y: Option<f64>,
     noise: f64,
     seed: i64,
     bits: Option<i64>,
@@ -357,6 +360,7 @@ pub fn synth<'py>(
     a.line = line;
     a.profile = profile;
     a.blur = blur;
+    a.blur_y = blur_y;
     a.noise = noise;
     a.levels = levels;
     a.tone = tone.parse().map_err(to_py_err)?;

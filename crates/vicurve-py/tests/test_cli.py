@@ -31,6 +31,8 @@ SYNTH_CASES = [
      dict(shape="sine-line", size=(220, 140), levels=(0.8, 0.3))),
     (["disc", "--size", "160x160", "--radius", "50", "--blur", "1", "--tone", "srgb"],
      dict(shape="disc", size=(160, 160), radius=50, blur=1, tone="srgb")),
+    (["disc", "--size", "160x160", "--radius", "50", "--blur", "1", "--blur-y", "2.5"],
+     dict(shape="disc", size=(160, 160), radius=50, blur=1, blur_y=2.5)),
     (["paper-disc"], dict(shape="paper-disc")),
 ]
 

@@ -108,6 +108,11 @@ pub struct Args {
     /// Gaussian blur, standard deviation in pixels (default 0; necking 1.5).
     #[arg(long)]
     pub blur: Option<f64>,
+    /// The blur along the columns (y) when it differs from `--blur`, which
+    /// is then the blur along the rows (x): an astigmatic lens. Exact
+    /// coverage only (not with `--profile`).
+    #[arg(long, value_name = "SIGMA")]
+    pub blur_y: Option<f64>,
     /// Additive Gaussian noise, standard deviation as a fraction of the
     /// contrast (0.01 = 1 %; default 0, necking 0.001).
     #[arg(long)]

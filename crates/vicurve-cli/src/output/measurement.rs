@@ -139,7 +139,17 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
     }
     print_closed_measures(m);
     let last_profile = m.stages.last().map(|s| s.profile);
-    if let Some(Profile::PixelEdge { blur }) = last_profile {
+    if let Some(Profile::PixelEdge { blur, anisotropy }) = last_profile
+        .filter(|p| matches!(p, Profile::PixelEdge { anisotropy, .. } if !anisotropy.is_none()))
+    {
+        let amplitude = anisotropy.amplitude();
+        println!(
+            "edge blur:   {:.3} px optical along {:.1} deg (clockwise on screen from +x), {:.3} px perpendicular to it (fitted anisotropic blur: astigmatism or motion; the last stage's virtual edge is a pixel through it, so the true boundary is measured)",
+            (blur * blur + amplitude).sqrt(),
+            anisotropy.axis().to_degrees(),
+            (blur * blur - amplitude).max(0.0).sqrt()
+        );
+    } else if let Some(Profile::PixelEdge { blur, .. }) = last_profile {
         println!(
             "edge blur:   {blur:.3} px optical (fitted; the last stage's virtual edge is a pixel through it, so the true boundary is measured)"
         );

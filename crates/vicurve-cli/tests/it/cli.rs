@@ -648,3 +648,56 @@ fn an_encoded_image_is_measured_in_linear_light() {
         "--tone",
     );
 }
+
+/// An astigmatic disc (`synth --blur-y`): its truth file records both
+/// blurs, `measure` fits the blur's anisotropy (the last stage's profile
+/// in the JSON, a summary line with the blurs along and across its axis),
+/// and `--blur-y` with the virtual profile's rendering is refused in one
+/// line.
+#[test]
+fn an_astigmatic_blur_is_synthesised_and_measured() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (img, truth) = (p(d, "astig.png"), p(d, "astig.json"));
+    let out = vicurve(&[
+        "synth", "disc", "--size", "240x240", "--radius", "80", "--blur", "1", "--blur-y", "2.5",
+        "--noise", "0.01", "--out", &img, "--truth", &truth,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    assert_eq!(t["image"]["blur_sigma_y"], 2.5, "{t}");
+    let json = p(d, "r.json");
+    let out = vicurve(&[
+        "measure",
+        &img,
+        "--init",
+        "circle:120,119,80",
+        "--out",
+        &json,
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = vicurve(&["measure", &img, "--init", "circle:120,119,80"]);
+    let summary = text(&out.stdout);
+    assert!(summary.contains("px perpendicular to it"), "{summary}");
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let last = &m["stages"][m["stages"].as_array().unwrap().len() - 1]["profile"];
+    let p_ = last["anisotropy"]["p"].as_f64().unwrap();
+    // Variance 1 along x, 6.25 along y: p = (1 - 6.25) / 2.
+    assert!((p_ + 2.625).abs() < 0.5, "{last}");
+    assert_error(
+        &vicurve(&[
+            "synth",
+            "disc",
+            "--profile",
+            "5",
+            "--blur-y",
+            "2",
+            "--out",
+            &p(d, "x.png"),
+        ]),
+        1,
+        "blur_sigma_y",
+    );
+}

@@ -124,7 +124,12 @@ fn failed_criteria(r: &HashMap<String, String>) -> Vec<String> {
     if r["outcome"] != "converged" {
         failed.push(format!("{} {}", r["outcome"], r["message"]));
     }
-    let limit = bias_limit(num("blur"), num("noise_pct"));
+    // An astigmatic image is as blurred as its larger blur.
+    let blur = match r["blur_y"].as_str() {
+        "" => num("blur"),
+        _ => num("blur").max(num("blur_y")),
+    };
+    let limit = bias_limit(blur, num("noise_pct"));
     // The noise's share: on a noiseless image only the rounding of the
     // levels, a small part of the bound; the runner's figure otherwise.
     let noise = num("bias_noise");

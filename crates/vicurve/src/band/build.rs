@@ -8,7 +8,7 @@ use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
 use crate::spline::{Basis, MAX_DEGREE};
 use crate::virtual_image::corner::CornerWedge;
-use crate::virtual_image::Profile;
+use crate::virtual_image::{Anisotropy, Profile};
 
 /// What band to build: its size, profile, image, the pixels it keeps and
 /// how they get their coordinates. [`BandParams::new`] gives the plain
@@ -149,10 +149,14 @@ const MAX_WEDGES: usize = 2;
 
 impl Candidate {
     /// Take the corners' `wedges` that reach the pixel into its profile,
-    /// evaluated under the spread `spread` (px).
-    pub(super) fn add_wedges(&mut self, wedges: impl Iterator<Item = CornerWedge>, spread: f64) {
+    /// evaluated under the optical blur `blur` (px) with `anisotropy`.
+    pub(super) fn add_wedges(
+        &mut self,
+        wedges: impl Iterator<Item = CornerWedge>,
+        (blur, anisotropy): (f64, Anisotropy),
+    ) {
         for (slot, w) in self.wedges.iter_mut().zip(wedges) {
-            let term = w.term(spread);
+            let term = w.term_for(blur, anisotropy);
             *slot = Some(w);
             self.corner += term;
             self.gamma += term;
@@ -228,7 +232,7 @@ impl Band {
         let reach = params.half_width + params.margin;
         check_inside(curve, reach, params.width, params.height)?;
         let blurred_curvature = match params.profile {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {
                 BlurredCurvature::new(curve, blur)
             }
             Profile::Paper { .. } => None,

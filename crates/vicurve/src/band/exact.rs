@@ -8,7 +8,7 @@ use super::raster::{unpack, Chords, GridShape};
 use super::{BandScratch, MIN_JACOBIAN};
 use crate::curve::Clearance;
 use crate::virtual_image::pixel_edge::spread_variance;
-use crate::virtual_image::Profile;
+use crate::virtual_image::{Anisotropy, Profile};
 use rayon::prelude::*;
 
 /// Cells of the band's grid per parallel task of the exact projection.
@@ -79,12 +79,16 @@ impl Pixels<'_> {
     ) -> CellSearch<'g> {
         // Pixels that see both sides of a corner (see `curve/corners.rs`).
         let blur = match self.profile {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => blur,
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => blur,
             Profile::Paper { .. } => 0.0,
         };
-        // The pixel-edge profile's spread, for the corners' wedge terms.
+        // The pixel-edge profile's blur, for the corners' wedge terms, and
+        // its largest spread, for their reach.
         let spread = match self.profile {
-            Profile::PixelEdge { blur } => Some(spread_variance(blur).sqrt()),
+            Profile::PixelEdge { blur, anisotropy } => Some((
+                spread_variance(anisotropy.largest(blur)).sqrt(),
+                (blur, anisotropy),
+            )),
             _ => None,
         };
         CellSearch {
@@ -102,13 +106,13 @@ impl Pixels<'_> {
         let (foot, jacobian) = self.foot_of_cell(cell, c)?;
         let (pos, u) = (foot.pos, foot.s);
         let mut candidate = self.candidate(foot, jacobian);
-        if let Some(spread) = cell.spread {
+        if let Some((spread, blur)) = cell.spread {
             let (length, closed) = (self.curve.param_length(), self.curve.is_closed());
             let wedges = cell
                 .clearances
                 .iter()
                 .filter_map(|c| c.wedge(pos, u, length, closed, spread));
-            candidate.add_wedges(wedges, spread);
+            candidate.add_wedges(wedges, blur);
         }
         Some(candidate)
     }
@@ -164,7 +168,8 @@ struct CellSearch<'a> {
     nearest: &'a [u64],
     cutoff2: f64,
     clearances: Vec<Clearance>,
-    spread: Option<f64>,
+    /// The pixel edge's largest spread (px) and its blur and anisotropy.
+    spread: Option<(f64, (f64, Anisotropy))>,
 }
 
 /// Sort distinct cell indices ascending (LSD radix, 11 bits a pass; the

@@ -101,8 +101,7 @@ pub use raster::BandScratch;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::spline::Basis;
-use crate::virtual_image::pixel_edge::spread_variance;
-use crate::virtual_image::Profile;
+use crate::virtual_image::{Anisotropy, Profile};
 
 /// Pixels (and levelset mesh nodes) whose parallel-curve Jacobian
 /// `1 - kappa r` is at or below this are left out: too close to (or beyond)
@@ -331,16 +330,15 @@ impl Band {
     }
 
     /// Every pixel's wedge term under the pixel-edge profile of blur `blur`
-    /// (px) instead of the band's, or `None` when no pixel has one (for
-    /// comparing blurs at a fixed curve; allocates).
-    pub(crate) fn corner_terms(&self, blur: f64) -> Option<Vec<f64>> {
+    /// (px) with `anisotropy` instead of the band's, or `None` when no pixel
+    /// has one (for comparing blurs at a fixed curve; allocates).
+    pub(crate) fn corner_terms(&self, blur: f64, anisotropy: Anisotropy) -> Option<Vec<f64>> {
         if self.corner_wedges.is_empty() {
             return None;
         }
-        let spread = spread_variance(blur).sqrt();
         let mut terms = vec![0.0; self.len()];
         for (i, w) in &self.corner_wedges {
-            terms[*i as usize] += w.term(spread);
+            terms[*i as usize] += w.term_for(blur, anisotropy);
         }
         Some(terms)
     }
@@ -414,7 +412,7 @@ mod tests {
             Profile::Paper {
                 kind: Kind::Silhouette,
             },
-            Profile::PixelEdge { blur: 1.2 },
+            Profile::pixel_edge(1.2),
         ];
         for profile in profiles {
             let build =

@@ -556,7 +556,7 @@ impl Correlation {
         let mut corr = Correlation::new(band, basis, levels)?;
         corr.pushed = Some(values);
         // With varying levels, the light's tilt across the band too.
-        if let (Some(var), Profile::PixelEdge { blur }) =
+        if let (Some(var), Profile::PixelEdge { blur, .. }) =
             (corr.varying.as_deref_mut(), corr.band.profile())
         {
             let measured = match known_tilt {
@@ -689,20 +689,32 @@ impl Correlation {
     /// band's level model), over every `stride`-th band pixel. For choosing
     /// a profile parameter (the blur) at a fixed curve.
     pub fn pushed_ssr(&self, lambda: &[f64], profile: Profile, stride: usize) -> Option<f64> {
-        let values = self.pushed.as_deref()?;
         let band = &self.band;
         let half_width = band.half_width();
         let corner = match profile {
-            Profile::PixelEdge { blur } => band.corner_terms(blur),
+            Profile::PixelEdge { blur, anisotropy } => band.corner_terms(blur, anisotropy),
             Profile::PixelLine { .. } | Profile::Paper { .. } => None,
         };
-        let gamma_at = |i: usize| {
-            let u = self.displacement_at(i, lambda);
+        self.pushed_ssr_by(lambda, stride, |i, r| {
             profile
-                .eval(band.r[i] - u, half_width, band.normal[i], band.curvature[i])
+                .eval(r, half_width, band.normal[i], band.curvature[i])
                 .0
                 + corner.as_ref().map_or(0.0, |c| c[i])
-        };
+        })
+    }
+
+    /// [`Correlation::pushed_ssr`] of the virtual image whose profile at
+    /// band pixel `i`, at signed distance `r` from the displaced curve, is
+    /// `gamma(i, r)`.
+    pub(crate) fn pushed_ssr_by(
+        &self,
+        lambda: &[f64],
+        stride: usize,
+        gamma: impl Fn(usize, f64) -> f64 + Sync,
+    ) -> Option<f64> {
+        let values = self.pushed.as_deref()?;
+        let band = &self.band;
+        let gamma_at = |i: usize| gamma(i, band.r[i] - self.displacement_at(i, lambda));
         let stride = stride.max(1);
         let count = values.len().div_ceil(stride);
         if let Some(var) = &self.varying {
@@ -995,7 +1007,7 @@ mod tests {
         })
         .unwrap();
         let sampler = Sampler::new(&image, Interpolation::Bilinear);
-        let profile = Profile::PixelEdge { blur };
+        let profile = Profile::pixel_edge(blur);
         // The measured radius every 2 degrees, from a reference circle.
         let measure = |r: f64| -> Vec<f64> {
             let curve = InitialCurve::Circle { cx, cy, r }.to_curve().unwrap();

@@ -9,7 +9,7 @@ use crate::interp::Sampler;
 use crate::psf;
 use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::pixel_edge::MIN_BLUR;
-use crate::virtual_image::{Kind, Profile};
+use crate::virtual_image::{Anisotropy, Kind, Profile};
 
 /// Half-width of the first band on which the edge's blur is estimated,
 /// pixels (a wider one is tried when the edge fills it).
@@ -185,8 +185,13 @@ pub(super) fn blur_residual<'a>(
     lambda: &'a [f64],
 ) -> impl Fn(f64) -> f64 + 'a {
     let stride = corr.band().len().div_ceil(BLUR_FIT_PIXELS);
+    // The blur's anisotropy stays as the band's profile has it.
+    let anisotropy = match corr.band().profile() {
+        Profile::PixelEdge { anisotropy, .. } => anisotropy,
+        _ => Anisotropy::NONE,
+    };
     move |blur: f64| {
-        corr.pushed_ssr(lambda, Profile::PixelEdge { blur }, stride)
+        corr.pushed_ssr(lambda, Profile::PixelEdge { blur, anisotropy }, stride)
             .unwrap_or(f64::INFINITY)
     }
 }

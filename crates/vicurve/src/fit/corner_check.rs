@@ -16,7 +16,7 @@
 //!
 //! So each hypothesis is rendered as the camera would record it, the
 //! region bounded by its measured curve by exact pixel coverage under
-//! the measured blur ([`blurred_coverage`]), on the pixels within
+//! the measured blur ([`blurred_coverage_anisotropic`]), on the pixels within
 //! [`PATCH`] of the vertex (plus two spreads of the blur), and fitted to
 //! the image there with a dark level and a contrast of its own. The
 //! difference of their sums of squared residuals, in noise variances, is
@@ -42,8 +42,9 @@ use super::Outcome;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::measurement::Measurement;
-use crate::render::blur::blurred_coverage;
+use crate::render::blur::blurred_coverage_anisotropic;
 use crate::virtual_image::pixel_edge::optical_blur;
+use crate::virtual_image::{Anisotropy, Profile};
 
 /// Radius of the compared pixels about a vertex, pixels, before the
 /// blur's margin: a corner rounded by up to this radius differs from a
@@ -87,7 +88,7 @@ pub(super) fn verdicts(
 ) -> Vec<Verdict> {
     let blur = measured_blur(smooth)
         .or_else(|| measured_blur(cornered))
-        .unwrap_or(0.0);
+        .unwrap_or((0.0, Anisotropy::NONE));
     let noise = sampler
         .pixel_noise()
         .powi(2)
@@ -164,14 +165,22 @@ pub(super) fn cover_dropped(m: &mut Measurement, sharp: &SplineCurve, verdicts: 
 }
 
 /// The optical blur (pixels) the measurement's edge spread or its last
-/// stage's pixel edge gives, if any.
-fn measured_blur(m: &Measurement) -> Option<f64> {
+/// stage's pixel edge gives, if any, and its anisotropy: an anisotropic
+/// pixel edge's own blur (the edge spread's is a mean over the curve's
+/// directions).
+fn measured_blur(m: &Measurement) -> Option<(f64, Anisotropy)> {
     if !matches!(m.outcome, Outcome::Converged | Outcome::IterationLimit) {
         return None;
+    }
+    if let Some(Profile::PixelEdge { blur, anisotropy }) = m.stages.last().map(|s| s.profile) {
+        if !anisotropy.is_none() {
+            return Some((blur, anisotropy));
+        }
     }
     m.edge_spread
         .map(|e| optical_blur(e.sigma))
         .or_else(|| m.stages.last().and_then(|s| s.profile.blur()))
+        .map(|blur| (blur, Anisotropy::NONE))
 }
 
 /// The closest points of a curve: its points a pixel of parameter apart,
@@ -225,15 +234,17 @@ struct Patch {
     v: [f64; 2],
     /// Radius compared, pixels.
     radius: f64,
-    /// The optical blur, pixels.
-    blur: f64,
+    /// The optical blur, pixels (its mean over the directions), and its
+    /// anisotropy.
+    blur: (f64, Anisotropy),
 }
 
 impl Patch {
-    /// The pixels within [`PATCH`] plus two spreads of `blur` of `v`;
-    /// `None` where that disc leaves the image.
-    fn new(sampler: &Sampler, v: [f64; 2], blur: f64) -> Option<Patch> {
-        let radius = PATCH + 2.0 * (blur * blur + 1.0 / 12.0).sqrt();
+    /// The pixels within [`PATCH`] plus two spreads of `blur` (its largest)
+    /// of `v`; `None` where that disc leaves the image.
+    fn new(sampler: &Sampler, v: [f64; 2], blur: (f64, Anisotropy)) -> Option<Patch> {
+        let largest = blur.1.largest(blur.0);
+        let radius = PATCH + 2.0 * (largest * largest + 1.0 / 12.0).sqrt();
         let (lo_x, lo_y) = (v[0] - radius, v[1] - radius);
         let (hi_x, hi_y) = (v[0] + radius, v[1] + radius);
         let (w, h) = (sampler.width() as f64, sampler.height() as f64);
@@ -273,7 +284,8 @@ impl Patch {
             .iter()
             .map(|p| [p[0] - self.x0 as f64, p[1] - self.y0 as f64])
             .collect();
-        let g = blurred_coverage(self.width, self.height, &[shifted], self.blur).ok()?;
+        let g =
+            blurred_coverage_anisotropic(self.width, self.height, &[shifted], self.blur).ok()?;
         let g: Vec<f64> = self.pixels.iter().map(|&(k, _)| g[k]).collect();
         Some(fitted(&g, self.pixels.iter().map(|&(_, value)| value)))
     }
@@ -288,7 +300,7 @@ impl Patch {
         let length = curve.param_length();
         let closed = curve.is_closed();
         // Margin of the rendering beyond the compared disc: the blur's.
-        let margin = 5.0 * self.blur + 2.0;
+        let margin = 5.0 * self.blur.1.largest(self.blur.0) + 2.0;
         let reach = 2.0 * (self.radius + margin);
         if closed && 2.0 * reach >= length {
             return None;

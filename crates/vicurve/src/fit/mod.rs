@@ -44,6 +44,7 @@
 //! # Ok::<(), vicurve::Error>(())
 //! ```
 
+mod anisotropy;
 mod blur;
 pub mod breaks;
 mod config;

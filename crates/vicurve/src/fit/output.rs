@@ -270,7 +270,7 @@ impl<'a> SigmaTerms<'a> {
         // longer holds, unseen by the residuals; longer ones follow what
         // the image shows.
         let shortest = match fin.profile {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {
                 Some(shortest_element(blur))
             }
             Profile::Paper { .. } => {
@@ -287,7 +287,7 @@ impl<'a> SigmaTerms<'a> {
         });
         // A pixel-edge stage's settles amplify the noise of one fit.
         let gain = match fin.profile {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {
                 settle_noise_gain(blur, span)
             }
             Profile::Paper { .. } => 1.0,
@@ -321,7 +321,7 @@ impl<'a> SigmaTerms<'a> {
         // scales as the root of the noise variance.
         let rounding = fin.corr.rounding_gain(sampler);
         let edge = match fin.profile {
-            Profile::PixelEdge { blur } => Some(Some(blur)),
+            Profile::PixelEdge { blur, .. } => Some(Some(blur)),
             Profile::Paper {
                 kind: Kind::Silhouette,
             } => Some(None),

@@ -115,7 +115,7 @@ pub(super) fn refine(
     // the more the shorter its elements, and the coarse curve's shape
     // error.
     let settled = match band.profile {
-        Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => Some(blur),
+        Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => Some(blur),
         Profile::Paper { .. } => None,
     };
     corr.estimate_noise(&lambda, sampler);

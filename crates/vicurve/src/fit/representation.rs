@@ -72,7 +72,7 @@ impl Representation {
             return None;
         }
         let gain = match profile {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => {
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {
                 settle_shape_gain(blur, h)
             }
             Profile::Paper { .. } => 1.0,

@@ -369,7 +369,7 @@ impl<'s> Schedule<'s> {
                 let blur = optical_blur(e.sigma);
                 let elements = self.matched_elements(stage, chosen, blur, true);
                 self.matched_added = true;
-                self.pixel_edge = Some(Profile::PixelEdge { blur });
+                self.pixel_edge = Some(Profile::pixel_edge(blur));
                 self.stages.push(Stage {
                     half_width: self.pixel_edge_band(blur),
                     elements,

@@ -13,6 +13,7 @@
 //! whatever the start. Then
 //! the stage is done, and its result the next stage's reference.
 
+use super::anisotropy::{fit_anisotropy, MAX_ANISOTROPY_FITS};
 use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
 use super::loops;
 use super::output::Final;
@@ -126,6 +127,8 @@ pub(super) struct StageState {
     /// Tracking: once a refit of the blur confirms the one in use, the
     /// stage's settling runs do not refit it again.
     blur_confirmed: bool,
+    /// Fits of the blur's anisotropy so far.
+    anisotropy_fits: usize,
     /// Once the last stage has chosen its elements, re-runs keep them.
     fixed_elements: Option<usize>,
     /// The shape error of those elements, when the refinement measured one
@@ -255,6 +258,7 @@ impl Schedule<'_> {
             step: None,
             blur_updates: 0,
             blur_confirmed: false,
+            anisotropy_fits: 0,
             fixed_elements: None,
             shape_error: None,
             settles: 0,
@@ -814,7 +818,9 @@ impl Schedule<'_> {
             // A settle's new reference: the settles' fixed point. A blur
             // refit starts from the result (its profile changed).
             let extrapolated = match pushed {
-                Some(Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. }) if !again => {
+                Some(Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. })
+                    if !again =>
+                {
                     settle::extrapolated(&lambda, corr.basis(), &self.current, blur)
                 }
                 _ => None,
@@ -1005,7 +1011,10 @@ impl Schedule<'_> {
 
     /// The pixel edge's blur, fitted on the converged curve: whether it
     /// changed enough for one more run with it (then the profile is
-    /// updated).
+    /// updated). Once the isotropic blur has settled (no change, or its
+    /// runs spent), its anisotropy is fitted ([`fit_anisotropy`], at most
+    /// `MAX_ANISOTROPY_FITS` times; not on tracked frames, which keep the
+    /// first frame's).
     fn refit_blur(
         &mut self,
         st: &mut StageState,
@@ -1013,24 +1022,45 @@ impl Schedule<'_> {
         lambda: &[f64],
         (pushed, o): (Option<Profile>, Outcome),
     ) -> bool {
-        let (Some(Profile::PixelEdge { blur }), Outcome::Converged) = (pushed, o) else {
+        let (Some(Profile::PixelEdge { blur, anisotropy }), Outcome::Converged) = (pushed, o)
+        else {
             return false;
         };
-        if st.blur_updates >= MAX_BLUR_UPDATES || st.blur_confirmed {
+        if st.blur_confirmed {
             return false;
         }
-        let fitted = match self.tracked {
-            Some(_) => track::refit_blur(corr, lambda, blur),
-            None => fit_blur(corr, lambda, blur),
-        };
-        if (fitted - blur).abs() > BLUR_TOLERANCE {
-            self.pixel_edge = Some(Profile::PixelEdge { blur: fitted });
-            st.blur_updates += 1;
-            true
-        } else {
-            st.blur_confirmed = self.tracked.is_some();
-            false
+        if st.blur_updates < MAX_BLUR_UPDATES {
+            let fitted = match self.tracked {
+                Some(_) => track::refit_blur(corr, lambda, blur),
+                None => fit_blur(corr, lambda, blur),
+            };
+            if (fitted - blur).abs() > BLUR_TOLERANCE {
+                self.pixel_edge = Some(Profile::PixelEdge {
+                    blur: fitted,
+                    anisotropy,
+                });
+                st.blur_updates += 1;
+                return true;
+            }
         }
+        if self.tracked.is_some() {
+            st.blur_confirmed = true;
+            return false;
+        }
+        if st.anisotropy_fits >= MAX_ANISOTROPY_FITS {
+            return false;
+        }
+        st.anisotropy_fits += 1;
+        let Some((fitted, shape)) = fit_anisotropy(corr, lambda, blur, anisotropy) else {
+            // Settled, or isotropic: no more fits.
+            st.anisotropy_fits = MAX_ANISOTROPY_FITS;
+            return false;
+        };
+        self.pixel_edge = Some(Profile::PixelEdge {
+            blur: fitted,
+            anisotropy: shape,
+        });
+        true
     }
 
     /// Settle (default schedule, last stage): whether to re-reference on

@@ -54,7 +54,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::interp::{Interpolation, Sampler};
 use crate::tone::Tone;
-use crate::virtual_image::{Kind, Profile};
+use crate::virtual_image::{Anisotropy, Kind, Profile};
 use serde::{Deserialize, Serialize};
 
 /// What a tracked frame takes from the previous frame's measurement.
@@ -68,6 +68,10 @@ pub struct TrackState {
     /// Whether the gray levels were a global pair (not varying along the
     /// curve).
     pub global_levels: bool,
+    /// How the blur differs with direction (see [`Anisotropy`]; absent:
+    /// none).
+    #[serde(default, skip_serializing_if = "Anisotropy::is_none")]
+    pub anisotropy: Anisotropy,
     /// The tone curve the measurement read the gray levels with (see
     /// [`Measurement::tone`]): the next frames are read with it unless the
     /// configuration gives one.
@@ -106,11 +110,12 @@ impl TrackState {
         curve_length: f64,
         levels_vary: bool,
     ) -> Option<TrackState> {
-        let Profile::PixelEdge { blur } = profile else {
+        let Profile::PixelEdge { blur, anisotropy } = profile else {
             return None;
         };
         let state = TrackState {
             blur,
+            anisotropy,
             element_length: curve_length / elements as f64,
             global_levels: !levels_vary,
             tone: Tone::Linear,
@@ -138,7 +143,10 @@ impl TrackState {
 
     /// The profile of that stage.
     pub(super) fn profile(&self) -> Profile {
-        Profile::PixelEdge { blur: self.blur }
+        Profile::PixelEdge {
+            blur: self.blur,
+            anisotropy: self.anisotropy,
+        }
     }
 
     fn usable(&self) -> bool {
@@ -363,7 +371,7 @@ mod tests {
             .to_curve()
             .unwrap();
             let basis = Basis::new(3, 12, curve.param_length(), true).unwrap();
-            let profile = Profile::PixelEdge { blur };
+            let profile = Profile::pixel_edge(blur);
             let half_width = super::super::pixel_edge_band(blur);
             for levels in [LevelModel::Global, LevelModel::default()] {
                 let band = Band::build(&curve, &basis, half_width, profile, 200, 200).unwrap();

@@ -349,7 +349,7 @@ impl ModelProfile {
         let last = m.stages.last();
         let last_paper = m.last_paper_stage().or(last);
         match (config.kind, last.map(|s| s.profile)) {
-            (Kind::Silhouette, Some(Profile::PixelEdge { blur })) => {
+            (Kind::Silhouette, Some(Profile::PixelEdge { blur, .. })) => {
                 ModelProfile::PixelEdge { blur }
             }
             (Kind::Silhouette, _) if config.blur_correction => ModelProfile::PixelEdge {

@@ -74,7 +74,7 @@ pub(crate) fn profile_at(
 ) -> (f64, f64) {
     match profile {
         ModelProfile::PixelEdge { blur } => {
-            Profile::PixelEdge { blur }.eval(d, 1.0, normal, curvature)
+            Profile::pixel_edge(blur).eval(d, 1.0, normal, curvature)
         }
         ModelProfile::Paper {
             kind,

@@ -73,8 +73,15 @@ pub struct RenderSpec {
     pub background: f64,
     /// How the gray levels are computed.
     pub method: Method,
-    /// Standard deviation of the Gaussian blur, px (0: none).
+    /// Standard deviation of the Gaussian blur, px (0: none); with
+    /// `blur_sigma_y`, along the rows only.
     pub blur_sigma: f64,
+    /// [`Method::Coverage`] only: the blur's standard deviation along the
+    /// columns, px, when it differs from `blur_sigma` (an astigmatic lens
+    /// whose axes are the pixel grid's; see
+    /// [`blur::blurred_coverage_xy`]). `None`: the same.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blur_sigma_y: Option<f64>,
     /// Standard deviation of the additive Gaussian noise, as a fraction of
     /// `|foreground - background|` (0: none).
     pub noise: f64,
@@ -110,6 +117,7 @@ impl Default for RenderSpec {
             background: 0.2,
             method: Method::Coverage,
             blur_sigma: 0.0,
+            blur_sigma_y: None,
             noise: 0.0,
             seed: 0,
             bits: None,
@@ -155,6 +163,20 @@ impl RenderSpec {
                 "blur_sigma",
                 format!("{} px: must be between 0 and 1000", self.blur_sigma),
             ));
+        }
+        if let Some(y) = self.blur_sigma_y {
+            if !(y.is_finite() && (0.0..=1000.0).contains(&y)) {
+                return Err(Error::invalid(
+                    "blur_sigma_y",
+                    format!("{y} px: must be between 0 and 1000"),
+                ));
+            }
+            if self.method != Method::Coverage {
+                return Err(Error::invalid(
+                    "blur_sigma_y",
+                    "an astigmatic blur is rendered with exact coverage only (method coverage)",
+                ));
+            }
         }
         if !(self.noise.is_finite() && self.noise >= 0.0) {
             return Err(Error::invalid(

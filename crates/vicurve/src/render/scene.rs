@@ -56,8 +56,12 @@ pub struct Rendering {
     pub foreground: f64,
     /// Gray level elsewhere, in `[0, 1]`.
     pub background: f64,
-    /// Gaussian blur, px.
+    /// Gaussian blur, px (along the rows when `blur_sigma_y` is given).
     pub blur_sigma: f64,
+    /// The blur along the columns, px, when it differs (see
+    /// [`super::RenderSpec::blur_sigma_y`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blur_sigma_y: Option<f64>,
     /// Noise as a fraction of the contrast.
     pub noise: f64,
     /// Seed of the noise.
@@ -78,6 +82,7 @@ impl Rendering {
             foreground: 0.8,
             background: 0.2,
             blur_sigma: 1.0,
+            blur_sigma_y: None,
             noise: 0.01,
             seed,
             bits: Some(8),
@@ -91,6 +96,7 @@ impl Rendering {
             foreground: spec.foreground,
             background: spec.background,
             blur_sigma: spec.blur_sigma,
+            blur_sigma_y: spec.blur_sigma_y,
             noise: spec.noise,
             seed: spec.seed,
             bits: spec.bits,
@@ -131,6 +137,7 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
             background: scene.rendering.background,
             method: Method::Coverage,
             blur_sigma: scene.rendering.blur_sigma,
+            blur_sigma_y: scene.rendering.blur_sigma_y,
             noise: scene.rendering.noise,
             seed: scene.rendering.seed,
             bits: scene.rendering.bits,
@@ -156,7 +163,8 @@ pub(super) fn paint(
     r: &Rendering,
 ) -> Result<Image> {
     let (fg, bg) = (r.foreground, r.background);
-    let mut cov = blur::blurred_coverage(width, height, rings, r.blur_sigma)?;
+    let sigmas = (r.blur_sigma, r.blur_sigma_y.unwrap_or(r.blur_sigma));
+    let mut cov = blur::blurred_coverage_xy(width, height, rings, sigmas)?;
     cov.iter_mut().for_each(|c| *c = bg + (fg - bg) * *c);
     Ok(finish(Image::new(width, height, cov)?, r))
 }

@@ -28,7 +28,8 @@
 //! are handled by the integral's other form; a pixel farther than
 //! [`REACH`] spreads from the wedge gets no term (under 1e-12).
 
-use super::pixel_edge::normal_cdf_pdf;
+use super::anisotropy::Anisotropy;
+use super::pixel_edge::{normal_cdf_pdf, spread_variance};
 
 /// Beyond this many spreads from the wedge, a pixel's term is taken as 0.
 pub const REACH: f64 = 7.0;
@@ -166,6 +167,10 @@ pub struct CornerWedge {
     pub k: f64,
     /// The correlation of the two normal coordinates.
     pub rho: f64,
+    /// The directions `u`, `v` of the two coordinates: the term is
+    /// `P(Z.u < h, Z.v < k)` for the spread `Z` (`rho = u.v` under an
+    /// isotropic one).
+    pub directions: [[f64; 2]; 2],
     /// -1: the wedge is light the one-edge profile counts and the image
     /// does not have (a convex corner); +1: the reverse.
     pub sign: f64,
@@ -201,6 +206,12 @@ impl CornerWedge {
         } else {
             (d_own, -d_other, 1.0)
         };
+        let (n_own, n_other) = if on_into { (n1, n2) } else { (n2, n1) };
+        let directions = if convex {
+            [n_own, [-n_other[0], -n_other[1]]]
+        } else {
+            [[-n_own[0], -n_own[1]], n_other]
+        };
         // The term is at most the smaller one-dimensional tail.
         if h.min(k) < -REACH * spread {
             return None;
@@ -209,6 +220,7 @@ impl CornerWedge {
             h,
             k,
             rho: -(n1[0] * n2[0] + n1[1] * n2[1]),
+            directions,
             sign,
         })
     }
@@ -218,6 +230,24 @@ impl CornerWedge {
     pub fn term(&self, spread: f64) -> f64 {
         let s = spread.max(1e-6);
         self.sign * bivariate_normal_cdf(self.h / s, self.k / s, self.rho)
+    }
+
+    /// The term under the optical blur `blur` (pixels, its mean over the
+    /// directions) with `anisotropy`, and the pixel's own 1/12 px²: each
+    /// coordinate scaled by its own deviation, their correlation that of
+    /// the blur's covariance (a blur longer along the corner's bisector
+    /// reaches further into the wedge).
+    pub fn term_for(&self, blur: f64, anisotropy: Anisotropy) -> f64 {
+        let base = spread_variance(blur);
+        if anisotropy.is_none() {
+            return self.term(base.sqrt());
+        }
+        let [u, v] = self.directions;
+        let var = |w: [f64; 2]| (base + anisotropy.along(w)).max(1e-12);
+        let (su, sv) = (var(u).sqrt(), var(v).sqrt());
+        let cov = base * (u[0] * v[0] + u[1] * v[1]) + anisotropy.cross(u, v);
+        let rho = (cov / (su * sv)).clamp(-1.0, 1.0);
+        self.sign * bivariate_normal_cdf(self.h / su, self.k / sv, rho)
     }
 }
 
@@ -284,63 +314,107 @@ mod tests {
         assert_eq!(bivariate_normal_cdf(0.4, f64::NEG_INFINITY, 0.5), 0.0);
     }
 
+    /// What a brute-force blurred picture of the corner at `vertex`
+    /// (sides along `into` then `out`) says the one-edge profile misses at
+    /// `x`, under a Gaussian of covariance `cov`: quadrature on a grid
+    /// whose cell edges pass through the vertex (the midpoint rule's error
+    /// along a line is then that of an oblique line, which averages out).
+    fn brute_term(
+        vertex: [f64; 2],
+        (into, out): ([f64; 2], [f64; 2]),
+        x: [f64; 2],
+        cov: [[f64; 2]; 2],
+    ) -> f64 {
+        let n = |t: [f64; 2]| [-t[1], t[0]];
+        let (n1, n2) = (n(into), n(out));
+        let convex = into[0] * out[1] - into[1] * out[0] < 0.0;
+        let side =
+            |q: [f64; 2], m: [f64; 2]| (q[0] - vertex[0]) * m[0] + (q[1] - vertex[1]) * m[1] < 0.0;
+        // Bright where both (convex) or either (concave) sides say so.
+        let bright = |q: [f64; 2]| {
+            let (a, b) = (side(q, n1), side(q, n2));
+            if convex {
+                a && b
+            } else {
+                a || b
+            }
+        };
+        let det = cov[0][0] * cov[1][1] - cov[0][1] * cov[1][0];
+        let inv = [
+            [cov[1][1] / det, -cov[0][1] / det],
+            [-cov[1][0] / det, cov[0][0] / det],
+        ];
+        let largest = cov[0][0].max(cov[1][1]).sqrt() * 1.5;
+        let (mut corner, mut one_edge, mut total) = (0.0, 0.0, 0.0);
+        let m = 1600;
+        let far = (x[0] - vertex[0]).abs().max((x[1] - vertex[1]).abs());
+        let h = 2.0 * (8.0 * largest + far) / m as f64;
+        for i in 0..m {
+            for j in 0..m {
+                let q = [
+                    vertex[0] + (i as f64 + 0.5 - 0.5 * m as f64) * h,
+                    vertex[1] + (j as f64 + 0.5 - 0.5 * m as f64) * h,
+                ];
+                let d = [q[0] - x[0], q[1] - x[1]];
+                let quad = d[0] * (inv[0][0] * d[0] + inv[0][1] * d[1])
+                    + d[1] * (inv[1][0] * d[0] + inv[1][1] * d[1]);
+                let w = (-0.5 * quad).exp();
+                total += w;
+                if bright(q) {
+                    corner += w;
+                }
+                if side(q, n1) {
+                    one_edge += w;
+                }
+            }
+        }
+        (corner - one_edge) / total
+    }
+
+    /// A right-angled turn each way, and a pentagon's 72 degrees.
+    fn turns() -> [([f64; 2], [f64; 2]); 3] {
+        let a = 72f64.to_radians();
+        [
+            ([1.0, 0.0], [0.0, -1.0]),
+            ([1.0, 0.0], [0.0, 1.0]),
+            ([1.0, 0.0], [a.cos(), -a.sin()]),
+        ]
+    }
+
     /// The wedge's term is what a brute-force blurred picture of the
     /// corner says the one-edge profile misses, for both turns.
     #[test]
     fn the_wedge_term_is_the_corner_minus_one_edge() {
         let s = 2.0;
         let vertex = [0.3, -0.2];
-        // A right-angled turn each way, and a pentagon's 72 degrees.
-        for (into, out) in [
-            ([1.0, 0.0], [0.0, -1.0]),
-            ([1.0, 0.0], [0.0, 1.0]),
-            (
-                [1.0, 0.0],
-                [(72f64).to_radians().cos(), -(72f64).to_radians().sin()],
-            ),
-        ] {
-            let n = |t: [f64; 2]| [-t[1], t[0]];
-            let (n1, n2) = (n(into), n(out));
-            let convex = into[0] * out[1] - into[1] * out[0] < 0.0;
-            // Bright where both (convex) or either (concave) sides say so.
-            let bright = |q: [f64; 2]| {
-                let a = (q[0] - vertex[0]) * n1[0] + (q[1] - vertex[1]) * n1[1] < 0.0;
-                let b = (q[0] - vertex[0]) * n2[0] + (q[1] - vertex[1]) * n2[1] < 0.0;
-                if convex {
-                    a && b
-                } else {
-                    a || b
-                }
-            };
+        for (into, out) in turns() {
             for x in [[-3.0, 1.5], [-1.0, -2.0], [1.0, 0.7], [-6.0, 2.5]] {
-                // The blurred picture by quadrature of the Gaussian, on a
-                // grid whose cell edges pass through the vertex (the
-                // midpoint rule's error along a line is then that of an
-                // oblique line, which averages out).
-                let (mut corner, mut one_edge, mut total) = (0.0, 0.0, 0.0);
-                let m = 1600;
-                let far = (x[0] - vertex[0]).abs().max((x[1] - vertex[1]).abs());
-                let h = 2.0 * (8.0 * s + far) / m as f64;
-                for i in 0..m {
-                    for j in 0..m {
-                        let q = [
-                            vertex[0] + (i as f64 + 0.5 - 0.5 * m as f64) * h,
-                            vertex[1] + (j as f64 + 0.5 - 0.5 * m as f64) * h,
-                        ];
-                        let w = (-((q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2)) / (2.0 * s * s))
-                            .exp();
-                        total += w;
-                        if bright(q) {
-                            corner += w;
-                        }
-                        if (q[0] - vertex[0]) * n1[0] + (q[1] - vertex[1]) * n1[1] < 0.0 {
-                            one_edge += w;
-                        }
-                    }
-                }
-                let want = (corner - one_edge) / total;
+                let want = brute_term(vertex, (into, out), x, [[s * s, 0.0], [0.0, s * s]]);
                 let got =
                     CornerWedge::new(x, vertex, into, out, true, s).map_or(0.0, |w| w.term(s));
+                assert!(
+                    (got - want).abs() < 2e-4,
+                    "{into:?} {out:?} at {x:?}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    /// Under an anisotropic blur (an astigmatism along a slant, 2.6 px one
+    /// way and 1.2 px the other), the term scales each side's coordinate
+    /// by its own deviation and correlates them through the covariance:
+    /// the brute-force picture again, for both turns.
+    #[test]
+    fn the_anisotropic_wedge_term_is_the_corner_minus_one_edge() {
+        let (blur, a) = (2.0f64, Anisotropy { p: 1.5, q: -2.0 });
+        let v = spread_variance(blur);
+        let cov = [[v + a.p, a.q], [a.q, v - a.p]];
+        let vertex = [0.3, -0.2];
+        for (into, out) in turns() {
+            for x in [[-3.0, 1.5], [-1.0, -2.0], [1.0, 0.7], [-6.0, 2.5]] {
+                let want = brute_term(vertex, (into, out), x, cov);
+                let got = CornerWedge::new(x, vertex, into, out, true, 3.0)
+                    .map_or(0.0, |w| w.term_for(blur, a));
                 assert!(
                     (got - want).abs() < 2e-4,
                     "{into:?} {out:?} at {x:?}: {got} vs {want}"

@@ -21,11 +21,13 @@
 //! physical one, which removes the sub-pixel aliasing of a sharp edge and
 //! the curvature shift of a blurred one.
 
+pub mod anisotropy;
 pub mod corner;
 pub mod pixel_edge;
 mod polarity;
 mod psi;
 
+pub use anisotropy::Anisotropy;
 pub use polarity::Polarity;
 
 use serde::{Deserialize, Serialize};
@@ -88,8 +90,15 @@ pub enum Profile {
     /// skew of the profile too) is `pixel_edge::curved_edge`'s.
     PixelEdge {
         /// Standard deviation of the optical blur, pixels (0: a focused
-        /// edge, only the pixel's own integration).
+        /// edge, only the pixel's own integration); its mean over the
+        /// directions when `anisotropy` is not zero.
         blur: f64,
+        /// How the blur differs with direction ([`Anisotropy`]; zero, and
+        /// absent from JSON, for an isotropic blur): the profile's width
+        /// follows the blur across the edge, its curvature shift the blur
+        /// along it.
+        #[serde(default, skip_serializing_if = "Anisotropy::is_none")]
+        anisotropy: Anisotropy,
     },
     /// A thin line (a bar of `width` pixels) as an ideal square pixel
     /// records it through a Gaussian blur of `blur` pixels: the two curved
@@ -117,6 +126,14 @@ impl From<Kind> for Profile {
 }
 
 impl Profile {
+    /// The pixel edge through an isotropic blur of `blur` pixels.
+    pub fn pixel_edge(blur: f64) -> Profile {
+        Profile::PixelEdge {
+            blur,
+            anisotropy: Anisotropy::NONE,
+        }
+    }
+
     /// What the profile measures.
     pub fn kind(self) -> Kind {
         match self {
@@ -138,7 +155,7 @@ impl Profile {
     /// paper's).
     pub fn blur(self) -> Option<f64> {
         match self {
-            Profile::PixelEdge { blur } | Profile::PixelLine { blur, .. } => Some(blur),
+            Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => Some(blur),
             Profile::Paper { .. } => None,
         }
     }
@@ -154,16 +171,18 @@ impl Profile {
                 let rho = r / half_width;
                 (kind.gamma(rho), kind.gamma_prime(rho) / half_width)
             }
-            Profile::PixelEdge { blur } => {
-                pixel_edge::curved_edge(r, normal[0], normal[1], blur, curvature)
+            Profile::PixelEdge { blur, anisotropy } => {
+                let blurs = anisotropy.blurs(blur, normal);
+                pixel_edge::curved_edge(r, normal[0], normal[1], blurs, curvature)
             }
             Profile::PixelLine { blur, width } => {
                 // The bar between its sides at `r = -w/2` and `r = w/2`:
                 // the level on the bright side of the outer one less that
                 // on the bright side of the inner one.
                 let half = 0.5 * width;
-                let side =
-                    |r: f64| pixel_edge::curved_edge(r, normal[0], normal[1], blur, curvature);
+                let side = |r: f64| {
+                    pixel_edge::curved_edge(r, normal[0], normal[1], (blur, blur), curvature)
+                };
                 let ((outer, d_outer), (inner, d_inner)) = (side(r - half), side(r + half));
                 (outer - inner, d_outer - d_inner)
             }
@@ -175,7 +194,12 @@ impl std::fmt::Display for Profile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Profile::Paper { kind } => write!(f, "{kind}"),
-            Profile::PixelEdge { blur } => write!(f, "pixel edge (blur {blur:.3} px)"),
+            Profile::PixelEdge { blur, anisotropy } if anisotropy.is_none() => {
+                write!(f, "pixel edge (blur {blur:.3} px)")
+            }
+            Profile::PixelEdge { blur, anisotropy } => {
+                write!(f, "pixel edge (blur {blur:.3} px, {anisotropy})")
+            }
             Profile::PixelLine { blur, width } => {
                 write!(f, "pixel line (blur {blur:.3} px, width {width:.3} px)")
             }
@@ -252,7 +276,10 @@ mod tests {
             blur: 0.5,
             width: 40.0,
         };
-        let edge = Profile::PixelEdge { blur: 0.5 };
+        let edge = Profile::PixelEdge {
+            blur: 0.5,
+            anisotropy: Anisotropy::NONE,
+        };
         for i in -30..=30 {
             let r = i as f64 / 10.0;
             let (g, _) = wide.eval(20.0 + r, 25.0, n, 0.0);

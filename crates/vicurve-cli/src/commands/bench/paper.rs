@@ -325,7 +325,7 @@ fn run_one(spec: &RenderSpec) -> Result<Run, String> {
         final_r: last.map_or(f64::NAN, |s| s.half_width),
         elements: last.map_or(0, |s| s.elements),
         fitted_blur: match last.map(|s| s.profile) {
-            Some(Profile::PixelEdge { blur }) => blur,
+            Some(Profile::PixelEdge { blur, .. }) => blur,
             _ => f64::NAN,
         },
         iterations: m.iterations(),

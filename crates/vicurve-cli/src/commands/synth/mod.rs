@@ -64,6 +64,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
             (spec.background, spec.foreground) = (levels[0], levels[1]);
         }
         spec.blur_sigma = blur;
+        spec.blur_sigma_y = a.blur_y;
         spec.noise = noise;
         spec.seed = a.seed;
         spec.bits = Some(bits);
@@ -149,6 +150,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
             None => Method::Coverage,
         },
         blur_sigma: blur,
+        blur_sigma_y: a.blur_y,
         noise,
         seed: a.seed,
         bits: Some(bits),

@@ -10,7 +10,7 @@ use crate::output::write_json;
 use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid, Rendering};
 use vicurve::render::square_grid::square_grid;
 
-/// `--blur`, `--noise`, `--tone` and `--bits` (default 8) set in `r`; the
+/// `--blur`, `--blur-y`, `--noise`, `--tone` and `--bits` (default 8) set in `r`; the
 /// bits.
 fn with_options(a: &Args, r: &mut Rendering) -> Result<u8, Failure> {
     r.tone = a
@@ -20,6 +20,7 @@ fn with_options(a: &Args, r: &mut Rendering) -> Result<u8, Failure> {
     if let Some(b) = a.blur {
         r.blur_sigma = b;
     }
+    r.blur_sigma_y = a.blur_y.or(r.blur_sigma_y);
     if let Some(n) = a.noise {
         r.noise = n;
     }

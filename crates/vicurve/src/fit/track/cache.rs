@@ -46,7 +46,7 @@ use crate::error::Result;
 use crate::fit::{Coords, LevelModel};
 use crate::interp::Sampler;
 use crate::spline::Basis;
-use crate::virtual_image::Profile;
+use crate::virtual_image::{Anisotropy, Profile};
 use serde::{Deserialize, Serialize};
 
 /// A new band's margin is this many times the last frame's motion (see
@@ -133,6 +133,10 @@ struct BandRecord {
     half_width: f64,
     margin: f64,
     blur: f64,
+    /// The blur's anisotropy (none in files written before it was, and
+    /// not written when none).
+    #[serde(default, skip_serializing_if = "Anisotropy::is_none")]
+    anisotropy: Anisotropy,
     levels: LevelModel,
     width: usize,
     height: usize,
@@ -148,7 +152,7 @@ struct BandRecord {
 impl BandRecord {
     fn of(kept: &Kept) -> Option<BandRecord> {
         let basis = kept.reference.basis();
-        let Profile::PixelEdge { blur } = kept.corr.band().profile() else {
+        let Profile::PixelEdge { blur, anisotropy } = kept.corr.band().profile() else {
             return None;
         };
         if !(basis.breaks().is_empty() && kept.corr.basis().breaks().is_empty()) {
@@ -167,6 +171,7 @@ impl BandRecord {
             half_width: kept.corr.band().half_width(),
             margin: kept.corr.band().margin(),
             blur,
+            anisotropy,
             levels: kept.levels,
             width: kept.size.0,
             height: kept.size.1,
@@ -185,7 +190,10 @@ impl BandRecord {
             self.length,
             self.closed,
         )?;
-        let profile = Profile::PixelEdge { blur: self.blur };
+        let profile = Profile::PixelEdge {
+            blur: self.blur,
+            anisotropy: self.anisotropy,
+        };
         let size = (self.width, self.height);
         let band = Band::build_windowed(
             &reference,
@@ -301,7 +309,10 @@ impl TrackCache {
                 serves.then_some(kept)
             }
             Held::Written(r) => {
-                let profile = Profile::PixelEdge { blur: r.blur };
+                let profile = Profile::PixelEdge {
+                    blur: r.blur,
+                    anisotropy: r.anisotropy,
+                };
                 let serves = r.levels == levels
                     && (r.width, r.height) == size
                     && fits(&r.lambda, profile, r.half_width, r.margin);

@@ -132,7 +132,8 @@ fn a_small_disc_under_a_heavy_blur_keeps_its_radius() {
         };
         let m = measure(&image, &init, &FitConfig::default()).unwrap();
         let e = evaluate(&m.points(), &shape).unwrap();
-        let Some(Profile::PixelEdge { blur: fitted }) = m.stages.last().map(|s| s.profile) else {
+        let Some(Profile::PixelEdge { blur: fitted, .. }) = m.stages.last().map(|s| s.profile)
+        else {
             panic!("r {r}: no pixel-edge stage");
         };
         println!(

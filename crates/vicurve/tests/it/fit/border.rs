@@ -42,6 +42,7 @@ fn image_spec(kind: Kind, seed: u64) -> RenderSpec {
         foreground: 0.8,
         background: 0.2,
         blur_sigma: 1.0,
+        blur_sigma_y: None,
         noise: 0.01,
         seed,
         bits: Some(8),

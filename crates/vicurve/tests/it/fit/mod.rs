@@ -3,6 +3,7 @@
 //! case reaches are printed (run with `--nocapture`) and recorded in
 //! docs/benchmarks.md.
 
+mod anisotropy;
 mod bias;
 mod border;
 mod breaks;
@@ -193,7 +194,7 @@ fn exact_coverage_disc_noiseless() {
     let last = m.stages.last().unwrap();
     match last.profile {
         // A focused edge: the fitted blur is (nearly) nothing.
-        Profile::PixelEdge { blur } => assert!(blur < 0.1, "blur {blur}"),
+        Profile::PixelEdge { blur, .. } => assert!(blur < 0.1, "blur {blur}"),
         other => panic!("last profile {other:?}"),
     }
     // Under the sine profile alone a sharp edge aliases with the pixel grid
@@ -242,7 +243,7 @@ fn sharp_and_blurred_discs_at_several_positions() {
         };
         let (m, s) = run(&spec, init, FitConfig::default());
         let fitted = match m.stages.last().unwrap().profile {
-            Profile::PixelEdge { blur } => blur,
+            Profile::PixelEdge { blur, .. } => blur,
             other => panic!("blur {blur}: last profile {other:?}"),
         };
         println!(

@@ -27,6 +27,7 @@ fn ring(line: f64, ground: f64, blur: f64, noise: f64, seed: u64) -> RenderSpec 
         foreground: line,
         background: ground,
         blur_sigma: blur,
+        blur_sigma_y: None,
         noise,
         seed,
         bits: Some(8),

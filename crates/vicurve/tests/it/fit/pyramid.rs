@@ -84,6 +84,7 @@ fn a_thin_line_is_found_through_the_binned_stages() {
         foreground: 0.2,
         background: 0.8,
         blur_sigma: 1.0,
+        blur_sigma_y: None,
         noise: 0.02,
         seed: 7,
         bits: Some(8),

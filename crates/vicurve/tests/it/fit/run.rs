@@ -53,6 +53,7 @@ fn an_overshooting_run_converges_in_a_few_iterations() {
         foreground: 0.8,
         background: 0.2,
         blur_sigma: 1.0,
+        blur_sigma_y: None,
         noise: 0.02,
         seed: 5,
         bits: Some(8),

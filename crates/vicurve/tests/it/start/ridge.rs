@@ -32,6 +32,7 @@ fn blurred_line_image(
         foreground: fg,
         background: bg,
         blur_sigma,
+        blur_sigma_y: None,
         noise: 0.02,
         seed: 3,
         bits: Some(8),

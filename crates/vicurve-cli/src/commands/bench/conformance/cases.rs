@@ -27,6 +27,10 @@ pub const LINE_WIDTH: f64 = 2.5;
 /// output): the light of the other images, encoded before the noise.
 pub const TONES: [Tone; 2] = [Tone::Srgb, Tone::Gamma(2.2)];
 
+/// The blurs along x and along y of the astigmatic images, px (a lens
+/// blurring one axis more than the other).
+pub const ASTIGMATIC: (f64, f64) = (1.0, 2.5);
+
 /// The paper's three stages, used by half the far-start stars.
 pub const PAPER_STAGES: &str = "20:25,10:50,5:100";
 
@@ -183,6 +187,8 @@ pub struct ImageCase {
     pub noise: f64,
     /// The tone curve encoding the light (linear for most).
     pub tone: Tone,
+    /// Astigmatic images: the blur along y, px (`blur` is along x).
+    pub blur_y: Option<f64>,
     /// The image to render (its shape is the truth).
     pub spec: RenderSpec,
 }
@@ -332,6 +338,7 @@ pub fn encoded_case(
         background: bg,
         method: Method::Coverage,
         blur_sigma: blur,
+        blur_sigma_y: None,
         noise,
         seed: seed_of(&id),
         bits: Some(bits),
@@ -345,8 +352,27 @@ pub fn encoded_case(
         blur,
         noise,
         tone,
+        blur_y: None,
         spec,
     }
+}
+
+/// The image of `shape` through the astigmatic blur `(blur_x, blur_y)`
+/// px (the shape of [`image_case`]'s image with `blur_x`; its id ends in
+/// `astig` and the blur along y).
+pub fn astigmatic_case(
+    shape: ShapeName,
+    (blur_x, blur_y): (f64, f64),
+    noise: f64,
+    bits: u8,
+    bright: bool,
+) -> ImageCase {
+    let mut image = image_case(shape, blur_x, noise, bits, bright);
+    image.id.push_str(&format!("/astig{}", num(blur_y)));
+    image.blur_y = Some(blur_y);
+    image.spec.blur_sigma_y = Some(blur_y);
+    image.spec.seed = seed_of(&image.id);
+    image
 }
 
 /// Every case of `set`, grouped by image (each image is rendered once).
@@ -375,6 +401,23 @@ fn full_sweep() -> Vec<Case> {
         }
     }
     out.extend(encoded_sweep());
+    out.extend(astigmatic_sweep());
+    out
+}
+
+/// The silhouettes through the [`ASTIGMATIC`] blur, 1 % noise, 8 bits,
+/// both polarities, with every start.
+fn astigmatic_sweep() -> Vec<Case> {
+    let mut out = Vec::new();
+    for shape in ShapeName::SWEEP {
+        if shape.kind() != Kind::Silhouette {
+            continue;
+        }
+        for bright in [true, false] {
+            let image = astigmatic_case(shape, ASTIGMATIC, 0.01, 8, bright);
+            out.extend(with_starts(&image, None));
+        }
+    }
     out
 }
 
@@ -433,6 +476,9 @@ fn ci_sweep() -> Vec<Case> {
         let image = encoded_case(shape, blur, 0.01, 8, bright, tone);
         out.push(case(&image, start, None));
     }
+    // An astigmatic star.
+    let image = astigmatic_case(ShapeName::StarSharp, ASTIGMATIC, 0.01, 8, true);
+    out.push(case(&image, Start::Auto, None));
     out
 }
 

@@ -1,7 +1,7 @@
 //! `conformance.md`: how to reproduce, the conventions, the pass counts per
 //! shape x start, every failing case with its reasons, the full table.
 
-use super::cases::{ShapeName, BLURS, LINE_WIDTH, NOISES, PAPER_STAGES, SIZE};
+use super::cases::{ShapeName, ASTIGMATIC, BLURS, LINE_WIDTH, NOISES, PAPER_STAGES, SIZE, TONES};
 use super::score::{
     Row, BIAS_EASY, BIAS_HARD, BIAS_NOISE_SDS, BORDER_GAP, CLOSED_COVERAGE, MAX_OVER_SCATTER,
     SIGMA_RATIO,
@@ -61,6 +61,8 @@ fn header(s: &mut String, rows: &[Row], command: &str) {
 }
 
 fn conventions(s: &mut String) {
+    let (blur_x, blur_y) = ASTIGMATIC;
+    let tones: Vec<String> = TONES.iter().map(|t| t.to_string()).collect();
     let _ = writeln!(
         s,
         "## Conventions\n\n\
@@ -71,6 +73,11 @@ fn conventions(s: &mut String) {
          {NOISES:?} x the contrast, and 8- or \
          16-bit quantisation. Centres are moved off the pixel grid, and orientations and \
          phases set, by a generator seeded with the image id; so is the noise.\n\
+         - **Encoded and astigmatic images** (the full sweep's silhouettes, 1 % noise, 8 \
+         bits): the light encoded by {tones:?} after the blur of 1 or 2 px (shapes `disc \
+         srgb`, `disc gamma:2.2`); and blurred by {blur_x} px along x and \
+         {blur_y} px along y (shapes `disc astigmatic`, ids ending in `astig` and the \
+         blur along y).\n\
          - **Shapes**: disc r = 150; ellipse 180 x 110; stars of 6 lobes, mean radius 140, \
          amplitudes 0.1 (smallest radius of curvature 36 px) and 0.2 (24 px at the lobes, 14 px \
          in the bays); pentagon of circumradius 160 measured without breaks given (`polygon`: the corners the fit finds itself, `FitConfig::find_corners`) and \

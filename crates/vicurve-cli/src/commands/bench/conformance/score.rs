@@ -33,7 +33,8 @@ pub struct Row {
     /// Stable readable id: `shape/blurB/noiseN/Dbit/polarity/start[/paper-stages]`.
     pub id: String,
     /// Shape name; an encoded image's is followed by its tone curve
-    /// (`disc srgb`), so that the report counts them apart.
+    /// (`disc srgb`), an astigmatic one's by `astigmatic`, so that the
+    /// report counts them apart.
     pub shape: String,
     /// `silhouette` or `contour`.
     pub kind: String,
@@ -41,8 +42,10 @@ pub struct Row {
     pub polarity: String,
     /// Quantisation depth.
     pub bits: u8,
-    /// Blur sigma, px.
+    /// Blur sigma, px (along x when `blur_y` is given).
     pub blur: f64,
+    /// Astigmatic images: the blur along y, px.
+    pub blur_y: Option<f64>,
     /// Noise, % of the contrast.
     pub noise_pct: f64,
     /// Start name.
@@ -249,7 +252,9 @@ pub fn bias_noise(spec: &RenderSpec) -> f64 {
         _ => 0.0,
     };
     let var = (spec.noise * c).powi(2) + q * q / 12.0;
-    let sd = (spec.blur_sigma.powi(2) + 1.0 / 12.0).sqrt();
+    // An astigmatic blur: its mean variance over the directions.
+    let y = spec.blur_sigma_y.unwrap_or(spec.blur_sigma);
+    let sd = (0.5 * (spec.blur_sigma.powi(2) + y * y) + 1.0 / 12.0).sqrt();
     // integral of phi_sd(t)^2 dt.
     let edge = 1.0 / (2.0 * std::f64::consts::PI.sqrt() * sd);
     let profile = match spec.kind {
@@ -263,7 +268,9 @@ pub fn bias_noise(spec: &RenderSpec) -> f64 {
 
 fn row(case: &Case, outcome: &str, message: String, f: Figures, seconds: f64) -> Row {
     let img = &case.image;
-    let bias_limit = if img.blur <= 2.0 && img.noise <= 0.02 {
+    // An astigmatic image is as blurred as its larger blur.
+    let blur = img.blur.max(img.blur_y.unwrap_or(0.0));
+    let bias_limit = if blur <= 2.0 && img.noise <= 0.02 {
         BIAS_EASY
     } else {
         BIAS_HARD
@@ -281,15 +288,16 @@ fn row(case: &Case, outcome: &str, message: String, f: Figures, seconds: f64) ->
     };
     Row {
         id: case.id.clone(),
-        shape: if img.tone.is_identity() {
-            img.shape.name()
-        } else {
-            format!("{} {}", img.shape.name(), img.tone)
+        shape: match (img.tone.is_identity(), img.blur_y) {
+            (true, None) => img.shape.name(),
+            (true, Some(_)) => format!("{} astigmatic", img.shape.name()),
+            (false, _) => format!("{} {}", img.shape.name(), img.tone),
         },
         kind: format!("{:?}", img.shape.kind()).to_lowercase(),
         polarity: if img.bright { "bright" } else { "dark" }.into(),
         bits: img.bits,
         blur: img.blur,
+        blur_y: img.blur_y,
         noise_pct: (img.noise * 100.0 * 1e6).round() / 1e6,
         start: case.start.name().into(),
         schedule: case.stages.unwrap_or("default").into(),
@@ -330,6 +338,10 @@ impl Row {
             ("polarity", q(&self.polarity)),
             ("bits", self.bits.to_string()),
             ("blur", self.blur.to_string()),
+            (
+                "blur_y",
+                self.blur_y.map_or(String::new(), |y| y.to_string()),
+            ),
             ("noise_pct", self.noise_pct.to_string()),
             ("start", q(&self.start)),
             ("schedule", q(&self.schedule)),
