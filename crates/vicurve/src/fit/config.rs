@@ -98,6 +98,32 @@ pub fn default_stages() -> Vec<Stage> {
     ]
 }
 
+/// [`default_stages`] within a band half-width of `cap` pixels (see
+/// [`FitConfig::max_half_width`]): the wider stages left out but the last,
+/// and, when the first one left is under 4 px and the cap leaves room, a
+/// first stage of the cap's width (at most 5 px, elements of 40 px), so
+/// that a start a few pixels off still finds the edge.
+pub(crate) fn capped_stages(cap: f64) -> Vec<Stage> {
+    let all = default_stages();
+    let n = all.len();
+    let mut kept: Vec<Stage> = all
+        .into_iter()
+        .enumerate()
+        .filter(|(k, s)| s.half_width <= cap || k + 1 == n)
+        .map(|(_, s)| s)
+        .collect();
+    if kept[0].half_width < 4.0 && cap > kept[0].half_width + 0.5 {
+        kept.insert(
+            0,
+            Stage {
+                half_width: cap.min(5.0),
+                elements: Elements::Length(40.0),
+            },
+        );
+    }
+    kept
+}
+
 /// Everything that controls a measurement. `FitConfig::default()` is the
 /// documented default of each field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -175,6 +201,15 @@ pub struct FitConfig {
     /// image taken back to linear light; an explicit tone curve is undone
     /// before measuring. Default: auto.
     pub tone: Tone,
+    /// The widest band half-width of the default schedule, pixels, when
+    /// another edge lies beyond it (`measure --all` sets it from the gap
+    /// to the nearest object): its wider stages are left out (the last one
+    /// stays; a first band of this width, at most 5 px, comes first when
+    /// only narrow ones remain) and the matched stage's band (the pixel
+    /// edge or line) is at most this wide, so that it is still appended.
+    /// Explicit `stages` ignore it. Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_half_width: Option<f64>,
 }
 
 impl Default for FitConfig {
@@ -196,6 +231,7 @@ impl Default for FitConfig {
             breaks: Vec::new(),
             find_corners: true,
             tone: Tone::Auto,
+            max_half_width: None,
         }
     }
 }
@@ -210,6 +246,14 @@ impl FitConfig {
                 "degree",
                 format!("{} (must be 1 to 5)", self.degree),
             ));
+        }
+        if let Some(cap) = self.max_half_width {
+            if !(cap.is_finite() && cap > 0.0) {
+                return Err(Error::invalid(
+                    "max_half_width",
+                    format!("{cap} px (must be a positive number)"),
+                ));
+            }
         }
         if let Some(stages) = &self.stages {
             if stages.is_empty() {

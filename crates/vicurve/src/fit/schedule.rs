@@ -9,6 +9,7 @@ use super::blur::{
     estimate_spread, matched_band, pixel_edge_band_for, shortest_element, shortest_pixel_edge,
     BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
 };
+use super::config::capped_stages;
 use super::loops;
 use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
 use super::output::{plain_samples, plateau_stretch, Final, Output};
@@ -37,6 +38,10 @@ use std::f64::consts::TAU;
 /// whose ends grow an oscillation on shorter elements (docs/benchmarks.md,
 /// "A closed line's elements").
 const REFINED_LINE_BLUR: f64 = 0.7;
+/// The narrowest band a cap ([`FitConfig::max_half_width`]) leaves a
+/// pixel edge, pixels (and a pixel line beyond each side): the transition
+/// of a focused edge and half a pixel of its levels.
+const MIN_CAPPED_BAND: f64 = 1.5;
 
 /// Run the schedule of `config` from `reference`; with `tracked`, the
 /// tracking schedule instead (the pixel-edge stage alone, see
@@ -175,7 +180,12 @@ impl<'s> Schedule<'s> {
         let (stages, auto) = match (&config.stages, tracked) {
             (_, Some(t)) => (vec![t.stage()], true),
             (Some(s), None) => (s.clone(), false),
-            (None, None) => (default_stages(), true),
+            (None, None) => (
+                config
+                    .max_half_width
+                    .map_or_else(default_stages, capped_stages),
+                true,
+            ),
         };
         let min_el = min_elements(closed, config.degree, auto);
         let mut current = breaks::prepare(reference, &config.breaks)?;
@@ -312,13 +322,48 @@ impl<'s> Schedule<'s> {
     /// with the contrast the last stage measured ([`pixel_edge_band_for`]).
     fn pixel_edge_band(&self, blur: f64) -> f64 {
         let contrast = self.last.as_ref().and_then(|f| f.corr.levels_at(0.0));
-        pixel_edge_band_for(
+        let band = pixel_edge_band_for(
             blur,
             self.sampler.pixel_noise(),
             contrast.map(|(_, c)| c),
             self.sampler.quantum(),
-            self.clear_band_limit(),
-        )
+            self.clear_band_limit().min(self.border_clearance()),
+        );
+        self.capped(band)
+    }
+
+    /// The widest band half-width that keeps the current closed curve's
+    /// band inside the image, pixels (a pixel to spare): a noisy image's
+    /// wide pixel-edge band is narrowed there rather than lost (an object
+    /// 11 px from the border under a 2 px blur was left with the sine
+    /// profile, 0.11 px small). Unbounded for an open curve, which is
+    /// trimmed to its band instead.
+    fn border_clearance(&self) -> f64 {
+        let curve = &self.current;
+        if !curve.is_closed() {
+            return f64::INFINITY;
+        }
+        let (w, h) = (
+            self.sampler.width() as f64 - 1.0,
+            self.sampler.height() as f64 - 1.0,
+        );
+        let length = curve.param_length();
+        let n = (length.ceil() as usize).max(8);
+        let nearest = (0..n)
+            .map(|k| curve.point(k as f64 * length / n as f64))
+            .map(|p| p[0].min(p[1]).min(w - p[0]).min(h - p[1]))
+            .fold(f64::INFINITY, f64::min);
+        nearest - 1.0
+    }
+
+    /// `half_width` within [`FitConfig::max_half_width`] (pixels, a
+    /// quarter-pixel multiple when capped), not under the narrowest band a
+    /// pixel edge takes.
+    fn capped(&self, half_width: f64) -> f64 {
+        match self.config.max_half_width {
+            Some(cap) if cap < half_width => ((cap * 4.0).floor() / 4.0).max(MIN_CAPPED_BAND),
+            _ => half_width,
+        }
     }
 
     /// The elements of the stage matched to an optical `blur` (pixels)
@@ -388,8 +433,9 @@ impl<'s> Schedule<'s> {
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::PixelLine { blur, width });
                 let half_width = 0.5 * width + self.pixel_edge_band(blur);
+                let half_width = self.capped((half_width * 4.0).ceil() / 4.0);
                 self.stages.push(Stage {
-                    half_width: (half_width * 4.0).ceil() / 4.0,
+                    half_width: half_width.max(0.5 * width + MIN_CAPPED_BAND),
                     elements,
                 });
             }

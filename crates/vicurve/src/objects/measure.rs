@@ -21,6 +21,9 @@ pub const MIN_GAP: f64 = 6.0;
 /// A band's half-width stays this far (px) inside the gap: the neighbour's
 /// edge reaches about three blur deviations into it.
 const BAND_MARGIN: f64 = 3.0;
+/// The band half-width of the default schedule's last stage, pixels: a
+/// cap below it leaves no stage.
+const LAST_DEFAULT_BAND: f64 = 2.0;
 /// A model whose residual exceeds the free curve's (or 1 % of the
 /// contrast, whichever is larger) this many times does not fit.
 const MISFIT_RATIO: f64 = 2.0;
@@ -165,9 +168,12 @@ fn start_curve(c: &Candidate) -> Result<InitialCurve, String> {
 
 /// The fit's configuration for an object of `region` (its neighbour's id
 /// `neighbour`) from `base`: when another edge lies within [`GAP_REACH`],
-/// the stages whose band would reach it left out (with the default
-/// schedule's rule that a coarse band wider than half the object's
-/// `radius`, px, is skipped). Errors: [`ObjectFailure::TooClose`].
+/// the bands kept clear of it: the default schedule capped there
+/// ([`FitConfig::max_half_width`]: it still ends with the pixel edge or
+/// line matched to the blur), or, for explicit stages, those whose band
+/// would reach it left out (with the default schedule's rule that a coarse
+/// band wider than half the object's `radius`, px, is skipped). Errors:
+/// [`ObjectFailure::TooClose`].
 pub(crate) fn capped_config(
     region: &RegionInfo,
     neighbour: Option<usize>,
@@ -188,6 +194,15 @@ pub(crate) fn capped_config(
         return Ok(fit);
     }
     let cap = gap - BAND_MARGIN;
+    // The default schedule, capped: it still ends with the pixel edge (or
+    // line) matched to the blur, whose band the cap narrows.
+    if fit.stages.is_none() {
+        if cap < LAST_DEFAULT_BAND {
+            return Err(too_close());
+        }
+        fit.max_half_width = Some(cap);
+        return Ok(fit);
+    }
     let all = fit.stages.clone().unwrap_or_else(default_stages);
     let n = all.len();
     let mut kept: Vec<Stage> = all
