@@ -7,9 +7,9 @@
 //! the variance along the edge's normal (the width of the transition); the
 //! curvature shift `v kappa / 2` sees the variance along the tangent (the
 //! blur smears the curved edge along itself). With an isotropic model both
-//! are the mean, and on an astigmatic image (1 px across x, 2.5 px across
-//! y) the measured edge wiggled by 0.8 px on a star's flanks while
-//! reporting 0.02 px (`fit/anisotropy.rs` estimates `p` and `q`).
+//! are the mean, and on an astigmatic image (1 px along x, 2.5 px along y)
+//! the measured edge wiggled by 0.8 px on a star's flanks while reporting
+//! 0.02 px (`fit/anisotropy.rs` estimates `p` and `q`).
 
 use serde::{Deserialize, Serialize};
 
