@@ -293,7 +293,9 @@ def test_an_encoded_image_is_measured_in_linear_light():
 def test_an_astigmatic_blur_is_fitted():
     """A disc blurred 1 px along x and 2.5 px along y (synth blur_y=): the
     last stage's pixel edge carries the blur's anisotropy, p = (1 - 6.25) / 2
-    px² (q = 0), and the curve is within 0.01 px of the truth on average."""
+    px² (q = 0), and the curve is within 3e-3 px of the truth on average
+    (+5.7e-3 before the blur's normal-tangent covariance entered the
+    curvature's skew)."""
     image, truth = vicurve.synth("disc", size=(240, 240), radius=80, blur=1.0, blur_y=2.5,
                                  noise=0.01)
     assert truth["image"]["blur_sigma_y"] == 2.5
@@ -302,4 +304,4 @@ def test_an_astigmatic_blur_is_fitted():
     assert profile["type"] == "pixel_edge"
     assert abs(profile["anisotropy"]["p"] + 2.625) < 0.5
     assert abs(profile["anisotropy"]["q"]) < 0.3
-    assert abs(vicurve.eval(r.points, truth)["bias"]) < 0.01
+    assert abs(vicurve.eval(r.points, truth)["bias"]) < 3e-3

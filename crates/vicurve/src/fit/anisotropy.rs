@@ -70,8 +70,9 @@ pub(super) fn fit_anisotropy(
     let stride = corr.band().len().div_ceil(ANISOTROPY_PIXELS).max(1);
     let pixels = corr.band().len().div_ceil(stride) as f64;
     let x0 = [blur * blur, current.p, current.q];
-    // The blur across the edge follows `x`; the curvature's shift keeps
-    // the blur along it in use: the curve was fitted with that shift, and
+    // The blur across the edge follows `x`; the curvature's terms keep the
+    // blur along it (and the covariance) in use: the curve was fitted with
+    // that shift, and
     // at a fixed curve a change of it would read as a misfit rather than
     // as the better model it may be (the next run refits the curve).
     let band = corr.band();
@@ -80,7 +81,8 @@ pub(super) fn fit_anisotropy(
         let (mean, shape) = (x[0].max(0.0).sqrt(), Anisotropy { p: x[1], q: x[2] });
         corr.pushed_ssr_by(lambda, stride, |i, r| {
             let n = band.normal[i];
-            let blurs = (shape.blurs(mean, n).0, current.blurs(blur, n).1);
+            let (_, along, cross) = current.blurs(blur, n);
+            let blurs = (shape.blurs(mean, n).0, along, cross);
             curved_edge(r, n[0], n[1], blurs, band.curvature[i]).0
                 + corner.as_ref().map_or(0.0, |c| c[i])
         })

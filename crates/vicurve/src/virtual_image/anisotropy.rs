@@ -63,18 +63,20 @@ impl Anisotropy {
         0.5 * self.q.atan2(self.p)
     }
 
-    /// The optical blurs `(along the normal, along the tangent)`, pixels,
-    /// of an isotropic blur `blur` with this anisotropy, at a point of unit
-    /// normal `n` (each at least 0).
+    /// The optical blurs along the normal and along the tangent, pixels
+    /// (each at least 0), and the covariance of the two (px²), of an
+    /// isotropic blur `blur` with this anisotropy at a point of unit normal
+    /// `n` (the tangent `(-ny, nx)`).
     #[inline]
-    pub fn blurs(&self, blur: f64, n: [f64; 2]) -> (f64, f64) {
+    pub fn blurs(&self, blur: f64, n: [f64; 2]) -> (f64, f64, f64) {
         if self.is_none() {
-            return (blur, blur);
+            return (blur, blur, 0.0);
         }
         let (mean, extra) = (blur * blur, self.along(n));
         (
             (mean + extra).max(0.0).sqrt(),
             (mean - extra).max(0.0).sqrt(),
+            self.cross(n, [-n[1], n[0]]),
         )
     }
 }
@@ -101,13 +103,16 @@ mod tests {
     fn an_astigmatic_blur_along_its_axes_and_between() {
         let a = Anisotropy { p: -2.625, q: 0.0 };
         let blur = 3.625f64.sqrt();
-        let (n, t) = a.blurs(blur, [0.0, 1.0]);
+        let (n, t, c) = a.blurs(blur, [0.0, 1.0]);
+        assert_eq!(c, 0.0);
         assert!(
             (n - 2.5).abs() < 1e-12 && (t - 1.0).abs() < 1e-12,
             "{n} {t}"
         );
         let d = std::f64::consts::FRAC_1_SQRT_2;
-        let (n, t) = a.blurs(blur, [d, d]);
+        // A diagonal normal: the axes' difference is the covariance.
+        let (n, t, c) = a.blurs(blur, [d, d]);
+        assert!((c - 2.625).abs() < 1e-12, "{c}");
         assert!(
             (n - blur).abs() < 1e-12 && (t - blur).abs() < 1e-12,
             "{n} {t}"

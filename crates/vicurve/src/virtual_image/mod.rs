@@ -181,7 +181,7 @@ impl Profile {
                 // on the bright side of the inner one.
                 let half = 0.5 * width;
                 let side = |r: f64| {
-                    pixel_edge::curved_edge(r, normal[0], normal[1], (blur, blur), curvature)
+                    pixel_edge::curved_edge(r, normal[0], normal[1], (blur, blur, 0.0), curvature)
                 };
                 let ((outer, d_outer), (inner, d_inner)) = (side(r - half), side(r + half));
                 (outer - inner, d_outer - d_inner)

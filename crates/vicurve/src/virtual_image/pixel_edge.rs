@@ -80,8 +80,10 @@ pub(crate) fn optical_blur(spread: f64) -> f64 {
 /// `r` (pixels) from it, for a pixel whose foot on the edge has the unit
 /// normal `(nx, ny)` and the signed curvature `curvature` (1/px, of the
 /// convention of [`super::Profile::eval`]), under the optical blurs
-/// `(across, along)` (pixels, along the normal and along the tangent; equal
-/// for an isotropic blur, see [`super::Anisotropy`]): the pixel edge
+/// `(across, along, cross)` (deviations along the normal and along the
+/// tangent, pixels, and the covariance of the two, px²; equal deviations
+/// and no covariance for an isotropic blur, see [`super::Anisotropy`]):
+/// the pixel edge
 /// ([`pixel_edge_cdf`]) moved by the curvature's shift and widened by its
 /// spread, plus the spread's skew, all to the second order in `v kappa`
 /// (`v` = [`spread_variance`] of the blur along the tangent).
@@ -91,7 +93,10 @@ pub(crate) fn optical_blur(spread: f64) -> f64 {
 /// kappa^3) x^4 / 24`. Along the normal there a Gaussian of variances
 /// `v_n` across and `v` along sees the level `E[Phi((y - f(X)) / sqrt
 /// v_n)]` with `X ~ N(0, v)`: the straight edge's profile averaged over the
-/// random offset `f(X)`. The
+/// random offset `f(X)`. A covariance `c` of the blur's normal and
+/// tangent parts adds `b X` (`b = c / v`) to the offset and takes `b² v`
+/// from the normal variance: the sum's variance is unchanged, its third
+/// cumulant gains `3 c² kappa` (from `Cov(f(X), X²)`). The
 /// offset's mean `v kappa / 2 + v^2 (kappa'' + 3 kappa^3) / 8` moves the
 /// profile (the term in `kappa''` is the blurred curvature's,
 /// `band/blurred_curvature.rs`); its variance `v^2 kappa^2 / 2` widens
@@ -110,7 +115,7 @@ pub(crate) fn curved_edge(
     r: f64,
     nx: f64,
     ny: f64,
-    (across, along): (f64, f64),
+    (across, along, cross): (f64, f64, f64),
     curvature: f64,
 ) -> (f64, f64) {
     let v = spread_variance(along);
@@ -124,7 +129,8 @@ pub(crate) fn curved_edge(
     // the spread across, where it can move the edge by more than 1e-7 px.
     let v_n = spread_variance(across);
     let sd = v_n.sqrt();
-    let skew = vk * vk * vk / (6.0 * v_n * sd);
+    let k3 = vk * vk * vk + 3.0 * cross * cross * curvature;
+    let skew = k3 / (6.0 * v_n * sd);
     if skew.abs() * sd > SKEW_FLOOR {
         let x = t / sd;
         let phi = (-0.5 * x * x).exp() * (0.5 / PI).sqrt();
@@ -330,7 +336,7 @@ mod tests {
                 .map(|i| {
                     let d = i as f64 * 0.1 * v.sqrt();
                     let exact = level(r + d, r, v);
-                    let (model, _) = curved_edge(d, n, n, (blur, blur), kappa);
+                    let (model, _) = curved_edge(d, n, n, (blur, blur, 0.0), kappa);
                     let first = 1.0 - pixel_edge_cdf(d + 0.5 * v / r, n, n, blur).0;
                     first_worst = first_worst.max((first - exact).abs());
                     (model - exact).abs()
@@ -345,23 +351,26 @@ mod tests {
 
     /// An anisotropic blur: a disc of radius 20 px under a Gaussian whose
     /// variance is 6 px² across the edge and 1 px² along it at the point
-    /// looked at (and the reverse), from the integral over the disc in
-    /// polar coordinates (smooth there; Simpson), against `curved_edge`
-    /// with those blurs across and along (a diagonal normal, as above):
-    /// within 5e-4 of the contrast over two spreads each side (measured
-    /// 2.5e-6 and 3.9e-4: the second order's error grows with `v kappa`,
-    /// here 0.3 along). With the
-    /// blur across in place of both (the isotropic model's curvature
-    /// shift), it errs by more than 3e-3.
+    /// looked at, the reverse, and 3.7 px² both ways with a covariance of
+    /// 2.6 px² between them (a blur elongated along a diagonal of the
+    /// normal and the tangent), from the integral over the disc in polar
+    /// coordinates (smooth there; Simpson), against `curved_edge` with
+    /// those blurs (a diagonal normal, as above): within 1e-3 of the
+    /// contrast over two spreads each side (measured 2.5e-6, 3.9e-4 and
+    /// 7.1e-4: the expansion's error grows with `v kappa`, 0.3 along in the
+    /// second). With the blur across in place of both and no covariance
+    /// (the isotropic model's curvature terms), it errs by 4.9e-2; without
+    /// the covariance's skew, the third case by 9.5e-3.
     #[test]
     fn the_curved_edge_follows_the_blur_along_it() {
         use crate::psf::simpson;
         let (r, n) = (20.0, FRAC_1_SQRT_2);
-        let mut isotropic_worst: f64 = 0.0;
-        for (v_across, v_along) in [(6.0, 1.0), (1.0, 6.0)] {
+        let (mut isotropic_worst, mut no_cross_worst): (f64, f64) = (0.0, 0.0);
+        for (v_across, v_along, c) in [(6.0, 1.0, 0.0), (1.0, 6.0, 0.0), (3.7, 3.7, 2.6)] {
             // The frame at the point `(r + d) (n, n)`: across along the
             // normal, along the tangent; the level is the Gaussian's mass
             // over the disc.
+            let det = v_across * v_along - c * c;
             let level = |d: f64| {
                 let x = [(r + d) * n, (r + d) * n];
                 let t = [-n, n];
@@ -370,29 +379,38 @@ mod tests {
                         let q = [rho * phi.cos() - x[0], rho * phi.sin() - x[1]];
                         let a = q[0] * n + q[1] * n;
                         let b = q[0] * t[0] + q[1] * t[1];
-                        (-0.5 * (a * a / v_across + b * b / v_along)).exp()
+                        let quad = (a * a * v_along - 2.0 * a * b * c + b * b * v_across) / det;
+                        (-0.5 * quad).exp()
                     })
-                }) / (2.0 * PI * (v_across * v_along).sqrt())
+                }) / (2.0 * PI * det.sqrt())
             };
             let blurs = (
                 (v_across - PIXEL_VARIANCE).sqrt(),
                 (v_along - PIXEL_VARIANCE).sqrt(),
+                c,
             );
             let worst = (-20..=20)
                 .map(|i| {
                     let d = i as f64 * 0.1 * v_across.sqrt();
                     let exact = level(d);
                     let (model, _) = curved_edge(d, n, n, blurs, -1.0 / r);
-                    let (iso, _) = curved_edge(d, n, n, (blurs.0, blurs.0), -1.0 / r);
-                    isotropic_worst = isotropic_worst.max((iso - exact).abs());
+                    let iso = (blurs.0, blurs.0, 0.0);
+                    let (iso, _) = curved_edge(d, n, n, iso, -1.0 / r);
+                    if c == 0.0 {
+                        isotropic_worst = isotropic_worst.max((iso - exact).abs());
+                    } else {
+                        let (plain, _) = curved_edge(d, n, n, (blurs.0, blurs.1, 0.0), -1.0 / r);
+                        no_cross_worst = no_cross_worst.max((plain - exact).abs());
+                    }
                     (model - exact).abs()
                 })
                 .fold(0.0, f64::max);
-            println!("across {v_across}, along {v_along}: within {worst:.2e}");
-            assert!(worst < 5e-4, "{worst}");
+            println!("across {v_across}, along {v_along}, covariance {c}: within {worst:.2e}");
+            assert!(worst < 1e-3, "{worst}");
         }
-        println!("the blur across alone within {isotropic_worst:.2e}");
+        println!("the blur across alone within {isotropic_worst:.2e}; no covariance {no_cross_worst:.2e}");
         assert!(isotropic_worst > 3e-3, "{isotropic_worst}");
+        assert!(no_cross_worst > 5e-3, "{no_cross_worst}");
     }
 
     /// `curved_edge`'s slope is its value's derivative.
@@ -402,9 +420,9 @@ mod tests {
             for i in -30..=30 {
                 let r = i as f64 * 0.25;
                 let h = 1e-6;
-                let (_, d) = curved_edge(r, 0.6, 0.8, (3.0, 3.0), kappa);
-                let fd = (curved_edge(r + h, 0.6, 0.8, (3.0, 3.0), kappa).0
-                    - curved_edge(r - h, 0.6, 0.8, (3.0, 3.0), kappa).0)
+                let (_, d) = curved_edge(r, 0.6, 0.8, (3.0, 3.0, 0.0), kappa);
+                let fd = (curved_edge(r + h, 0.6, 0.8, (3.0, 3.0, 0.0), kappa).0
+                    - curved_edge(r - h, 0.6, 0.8, (3.0, 3.0, 0.0), kappa).0)
                     / (2.0 * h);
                 assert!((fd - d).abs() < 1e-6, "kappa {kappa}, r {r}: {fd} vs {d}");
             }
