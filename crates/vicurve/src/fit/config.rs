@@ -98,13 +98,12 @@ pub fn default_stages() -> Vec<Stage> {
     ]
 }
 
-/// [`default_stages`] within a band half-width of `cap` pixels (see
+/// `all` (a schedule) within a band half-width of `cap` pixels (see
 /// [`FitConfig::max_half_width`]): the wider stages left out but the last,
 /// and, when the first one left is under 4 px and the cap leaves room, a
 /// first stage of the cap's width (at most 5 px, elements of 40 px), so
-/// that a start a few pixels off still finds the edge.
-pub(crate) fn capped_stages(cap: f64) -> Vec<Stage> {
-    let all = default_stages();
+/// that a start a few pixels off still finds the edge. `all` not empty.
+pub(crate) fn capped_stages(all: Vec<Stage>, cap: f64) -> Vec<Stage> {
     let n = all.len();
     let mut kept: Vec<Stage> = all
         .into_iter()

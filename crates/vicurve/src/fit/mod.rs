@@ -74,6 +74,7 @@ pub use crate::measurement::{
     Divergence, IterationRecord, LevelSample, Measurement, Outcome, RunKind, Sample, StageReport,
     Trim, TrimReason, TrimmedEnd,
 };
+pub(crate) use config::capped_stages;
 pub use config::{default_stages, parse_stages, Coords, Elements, FitConfig, Polarity, Stage};
 pub use track::{
     measure_tracked, measure_tracked_cached, measure_tracked_from, TrackCache, TrackSnapshot,

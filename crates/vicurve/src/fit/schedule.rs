@@ -9,7 +9,6 @@ use super::blur::{
     estimate_spread, matched_band, pixel_edge_band_for, shortest_element, shortest_pixel_edge,
     BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
 };
-use super::config::capped_stages;
 use super::loops;
 use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
 use super::output::{plain_samples, plateau_stretch, Final, Output};
@@ -18,8 +17,8 @@ use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
 use super::{
-    breaks, default_stages, Divergence, Elements, FitConfig, Measurement, Outcome, Sample, Stage,
-    StageReport, Trim, TrimReason, TrimmedEnd,
+    breaks, capped_stages, default_stages, Divergence, Elements, FitConfig, Measurement, Outcome,
+    Sample, Stage, StageReport, Trim, TrimReason, TrimmedEnd,
 };
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
@@ -183,7 +182,7 @@ impl<'s> Schedule<'s> {
             (None, None) => (
                 config
                     .max_half_width
-                    .map_or_else(default_stages, capped_stages),
+                    .map_or_else(default_stages, |cap| capped_stages(default_stages(), cap)),
                 true,
             ),
         };

@@ -6,7 +6,7 @@ use super::{AllConfig, ObjectFailure, ObjectResult, RegionInfo};
 use crate::curve::InitialCurve;
 use crate::derived::closed_measures;
 use crate::fit::{
-    breaks, default_stages, measure_from, Elements, FitConfig, Measurement, Outcome, Polarity,
+    breaks, capped_stages, default_stages, measure_from, FitConfig, Measurement, Outcome, Polarity,
     Stage,
 };
 use crate::image::Image;
@@ -21,9 +21,6 @@ pub const MIN_GAP: f64 = 6.0;
 /// A band's half-width stays this far (px) inside the gap: the neighbour's
 /// edge reaches about three blur deviations into it.
 const BAND_MARGIN: f64 = 3.0;
-/// The band half-width of the default schedule's last stage, pixels: a
-/// cap below it leaves no stage.
-const LAST_DEFAULT_BAND: f64 = 2.0;
 /// A model whose residual exceeds the free curve's (or 1 % of the
 /// contrast, whichever is larger) this many times does not fit.
 const MISFIT_RATIO: f64 = 2.0;
@@ -194,36 +191,26 @@ pub(crate) fn capped_config(
         return Ok(fit);
     }
     let cap = gap - BAND_MARGIN;
-    // The default schedule, capped: it still ends with the pixel edge (or
-    // line) matched to the blur, whose band the cap narrows.
-    if fit.stages.is_none() {
-        if cap < LAST_DEFAULT_BAND {
+    let Some(explicit) = fit.stages.take() else {
+        // The default schedule, capped: it still ends with the pixel edge
+        // (or line) matched to the blur, whose band the cap narrows.
+        if default_stages().last().is_some_and(|s| s.half_width > cap) {
             return Err(too_close());
         }
         fit.max_half_width = Some(cap);
         return Ok(fit);
-    }
-    let all = fit.stages.clone().unwrap_or_else(default_stages);
-    let n = all.len();
-    let mut kept: Vec<Stage> = all
-        .into_iter()
-        .enumerate()
-        .filter(|(k, s)| s.half_width <= cap && (k + 1 == n || s.half_width <= 0.5 * radius))
-        .map(|(_, s)| s)
-        .collect();
-    if kept.is_empty() {
+    };
+    let n = explicit.len();
+    if explicit.last().is_none_or(|s| s.half_width > cap) {
         return Err(too_close());
     }
-    if kept[0].half_width < 4.0 && cap > kept[0].half_width + 0.5 {
-        kept.insert(
-            0,
-            Stage {
-                half_width: cap.min(5.0),
-                elements: Elements::Length(40.0),
-            },
-        );
-    }
-    fit.stages = Some(kept);
+    let within: Vec<Stage> = explicit
+        .into_iter()
+        .enumerate()
+        .filter(|(k, s)| k + 1 == n || s.half_width <= 0.5 * radius)
+        .map(|(_, s)| s)
+        .collect();
+    fit.stages = Some(capped_stages(within, cap));
     Ok(fit)
 }
 

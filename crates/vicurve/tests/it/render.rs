@@ -676,6 +676,52 @@ fn blur_before_the_pixels_integrate_matches_the_analytic_edge() {
     assert!(worst_old > 1e-2, "{worst_old}");
 }
 
+/// The region below the line `y = 11.3 + 0.3 (x - 20)`, far beyond a
+/// 40 x 24 image: an oblique edge, and what a pixel of it holds.
+struct ObliqueEdge;
+
+impl ObliqueEdge {
+    const Y0: f64 = 11.3;
+    const SLOPE: f64 = 0.3;
+
+    fn line(x: f64) -> f64 {
+        Self::Y0 + Self::SLOPE * (x - 20.0)
+    }
+
+    /// The region, as the renderers take it.
+    fn ring() -> Vec<[f64; 2]> {
+        vec![
+            [-100.0, Self::line(-100.0)],
+            [140.0, Self::line(140.0)],
+            [140.0, 200.0],
+            [-100.0, 200.0],
+        ]
+    }
+
+    /// The unit normal, towards the region.
+    fn normal() -> [f64; 2] {
+        let norm = Self::SLOPE.hypot(1.0);
+        [-Self::SLOPE / norm, 1.0 / norm]
+    }
+
+    /// Pixel `(i, j)` of the edge blurred by a Gaussian of deviation `sd`
+    /// px across it: the mean of `Phi(d / sd)` over the pixel's square
+    /// (`d` the signed distance), by an `n x n` midpoint rule.
+    fn pixel(i: usize, j: usize, sd: f64, n: usize) -> f64 {
+        let norm = Self::SLOPE.hypot(1.0);
+        let cdf = |t: f64| 0.5 * libm::erfc(-t / std::f64::consts::SQRT_2);
+        let mut sum = 0.0;
+        for a in 0..n {
+            for b in 0..n {
+                let x = i as f64 - 0.5 + (a as f64 + 0.5) / n as f64;
+                let y = j as f64 - 0.5 + (b as f64 + 0.5) / n as f64;
+                sum += cdf((y - Self::line(x)) / norm / sd);
+            }
+        }
+        sum / (n * n) as f64
+    }
+}
+
 /// A camera sees the scene beyond the image's border too: an oblique
 /// blurred edge that crosses the border has, in the border's pixels, the
 /// values of the infinite edge (each pixel the mean of `Phi(d / sigma)`
@@ -685,33 +731,14 @@ fn blur_before_the_pixels_integrate_matches_the_analytic_edge() {
 #[test]
 fn an_edge_crossing_the_border_stays_straight_to_the_border() {
     let (w, h) = (40, 24);
-    let (y0, slope) = (11.3, 0.3);
-    let line = |x: f64| y0 + slope * (x - 20.0);
-    let ring = vec![
-        [-100.0, line(-100.0)],
-        [140.0, line(140.0)],
-        [140.0, 200.0],
-        [-100.0, 200.0],
-    ];
-    let norm = (1.0 + slope * slope).sqrt();
-    let cdf = |t: f64| 0.5 * libm::erfc(-t / std::f64::consts::SQRT_2);
+    let ring = ObliqueEdge::ring();
     for sigma in [1.0, 2.0, 4.0] {
         let got = vicurve::render::blur::blurred_coverage(w, h, std::slice::from_ref(&ring), sigma)
             .unwrap();
-        let n = 200;
         let (mut worst_border, mut worst_middle): (f64, f64) = (0.0, 0.0);
         for j in 0..h {
             for i in 0..w {
-                let mut want = 0.0;
-                for a in 0..n {
-                    for b in 0..n {
-                        let x = i as f64 - 0.5 + (a as f64 + 0.5) / n as f64;
-                        let y = j as f64 - 0.5 + (b as f64 + 0.5) / n as f64;
-                        want += cdf((y - line(x)) / norm / sigma);
-                    }
-                }
-                want /= (n * n) as f64;
-                let err = (got[j * w + i] - want).abs();
+                let err = (got[j * w + i] - ObliqueEdge::pixel(i, j, sigma, 200)).abs();
                 if i < 3 || i + 3 >= w {
                     worst_border = worst_border.max(err);
                 } else {
@@ -741,17 +768,8 @@ fn an_anisotropic_blur_renders_an_edge_blurred_along_its_normal() {
     use vicurve::render::blur::{blurred_coverage_anisotropic, blurred_coverage_xy};
     use vicurve::virtual_image::Anisotropy;
     let (w, h) = (40, 24);
-    let (y0, slope) = (11.3, 0.3);
-    let line = |x: f64| y0 + slope * (x - 20.0);
-    let ring = vec![
-        [-100.0, line(-100.0)],
-        [140.0, line(140.0)],
-        [140.0, 200.0],
-        [-100.0, 200.0],
-    ];
-    let norm = (1.0 + slope * slope).sqrt();
-    let normal = [-slope / norm, 1.0 / norm];
-    let cdf = |t: f64| 0.5 * libm::erfc(-t / std::f64::consts::SQRT_2);
+    let ring = ObliqueEdge::ring();
+    let normal = ObliqueEdge::normal();
     for (blur, a) in [
         (1.5f64, Anisotropy { p: 0.8, q: 1.2 }),
         (1.0, Anisotropy { p: 0.54, q: -0.84 }),
@@ -759,19 +777,10 @@ fn an_anisotropic_blur_renders_an_edge_blurred_along_its_normal() {
         let got =
             blurred_coverage_anisotropic(w, h, std::slice::from_ref(&ring), (blur, a)).unwrap();
         let across = (blur * blur + a.along(normal)).sqrt();
-        let n = 100;
         let mut worst: f64 = 0.0;
         for j in 0..h {
             for i in 6..w - 6 {
-                let mut want = 0.0;
-                for u in 0..n {
-                    for v in 0..n {
-                        let x = i as f64 - 0.5 + (u as f64 + 0.5) / n as f64;
-                        let y = j as f64 - 0.5 + (v as f64 + 0.5) / n as f64;
-                        want += cdf((y - line(x)) / norm / across);
-                    }
-                }
-                want /= (n * n) as f64;
+                let want = ObliqueEdge::pixel(i, j, across, 100);
                 worst = worst.max((got[j * w + i] - want).abs());
             }
         }

@@ -7,7 +7,7 @@
 use vicurve::fit::{measure, FitConfig, Measurement};
 use vicurve::render::{render, RenderSpec};
 use vicurve::start::{find_silhouette, StartConfig};
-use vicurve::truth::Shape;
+use vicurve::truth::{evaluate, Shape};
 use vicurve::virtual_image::{Anisotropy, Profile};
 
 use crate::common::spec;
@@ -27,17 +27,10 @@ fn measured(spec: &RenderSpec) -> (Measurement, f64, f64, f64) {
     let image = render(spec).unwrap();
     let start = find_silhouette(&image, &StartConfig::default()).unwrap();
     let m = measure(&image, &start.curve, &FitConfig::default()).unwrap();
-    let errors: Vec<f64> = m
-        .samples
-        .iter()
-        .map(|s| spec.shape.signed_distance(s.x, s.y))
-        .collect();
-    let n = errors.len() as f64;
-    let mean = errors.iter().sum::<f64>() / n;
-    let scatter = (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / n).sqrt();
-    let max = errors.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+    let e = evaluate(&m.points(), &spec.shape).unwrap();
+    let n = m.samples.len() as f64;
     let sigma = (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / n).sqrt();
-    (m, max, scatter, sigma)
+    (m, e.max_abs, e.scatter, sigma)
 }
 
 /// The last stage's pixel-edge blur and anisotropy.

@@ -355,20 +355,7 @@ fn a_disc_near_the_border_keeps_its_pixel_edge() {
         cy: 149.6,
         r: 40.0,
     };
-    let spec = RenderSpec {
-        width: 200,
-        height: 200,
-        shape: shape.clone(),
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
-        foreground: 0.8,
-        background: 0.2,
-        blur_sigma: 2.0,
-        noise: 0.01,
-        seed: 4,
-        bits: Some(8),
-        ..RenderSpec::default()
-    };
+    let spec = crate::common::spec(shape.clone(), (200, 200), 2.0, 0.01, 4, Some(8));
     let init = InitialCurve::Circle {
         cx: 101.2,
         cy: 148.5,
@@ -377,13 +364,7 @@ fn a_disc_near_the_border_keeps_its_pixel_edge() {
     let m = measure(&render(&spec).unwrap(), &init, &FitConfig::default()).unwrap();
     let last = m.stages.last().map(|s| s.profile);
     assert!(matches!(last, Some(Profile::PixelEdge { .. })), "{last:?}");
-    let n = m.samples.len() as f64;
-    let bias = m
-        .samples
-        .iter()
-        .map(|s| shape.signed_distance(s.x, s.y))
-        .sum::<f64>()
-        / n;
+    let bias = evaluate(&m.points(), &shape).unwrap().bias;
     println!("bias {bias:+.4} px, {} stages", m.stages.len());
     assert!(bias.abs() < 0.01, "{bias}");
 }
