@@ -110,6 +110,10 @@ const NOISE_TRIMMED_MOMENT: f64 = 0.623_015;
 /// stencil at a point of the last cell reaches two pixels beyond.
 const PAD: usize = 2;
 
+/// Pixels of the regular subsample the image-wide statistics read at most
+/// (about: one every `width height / SUBSAMPLE`).
+const SUBSAMPLE: usize = 65_536;
+
 /// An image prepared for interpolation.
 #[derive(Clone, Debug)]
 pub struct Sampler {
@@ -300,12 +304,18 @@ impl Sampler {
 
     /// The recorded gray level of the pixel whose centre is `(x, y)`
     /// (integers; the same as [`Sampler::value`] there, which every
-    /// interpolation kind reproduces, but read directly when the sampler
-    /// keeps the pixel values: bilinear and Keys). `None` outside the image.
+    /// interpolation kind reproduces): read from the image's own pixels
+    /// when the sampler keeps them (all but a binned level), else from
+    /// the bilinear or Keys coefficients (the pixels themselves) or, for a
+    /// binned cubic level, the spline (equal to rounding). `None` outside
+    /// the image.
     #[inline]
     pub fn pixel(&self, x: usize, y: usize) -> Option<f64> {
         if x >= self.width || y >= self.height {
             return None;
+        }
+        if let Some(&v) = self.pixels.get(y * self.width + x) {
+            return Some(v);
         }
         Some(match self.kind {
             Interpolation::Bilinear | Interpolation::Keys => {
@@ -366,16 +376,14 @@ impl Sampler {
     /// 3 pixels wide. Computed once per image and kept.
     pub fn pixel_noise(&self) -> f64 {
         *self.pixel_noise.get_or_init(|| {
-            let (w, h) = (self.width, self.height);
+            let w = self.width;
             if w < 3 {
                 return 0.0;
             }
-            let stride = ((w * h) / 65_536).max(1);
-            let mut squares: Vec<f64> = (0..w * h)
-                .step_by(stride)
-                .filter(|k| (1..w - 1).contains(&(k % w)))
-                .filter_map(|k| {
-                    let (x, y) = (k % w, k / w);
+            let mut squares: Vec<f64> = self
+                .subsample_cells()
+                .filter(|&(x, _)| (1..w - 1).contains(&x))
+                .filter_map(|(x, y)| {
                     let d =
                         self.pixel(x - 1, y)? - 2.0 * self.pixel(x, y)? + self.pixel(x + 1, y)?;
                     Some(d * d)
@@ -394,12 +402,29 @@ impl Sampler {
     /// The recorded levels of a regular subsample of at most about 65,536
     /// pixels, in raster order ([`Sampler::gray_range`], [`Sampler::quantum`]).
     fn subsample(&self) -> Vec<f64> {
-        let (w, h) = (self.width, self.height);
-        let stride = ((w * h) / 65_536).max(1);
-        (0..w * h)
-            .step_by(stride)
-            .filter_map(|k| self.pixel(k % w, k / w))
+        self.subsample_cells()
+            .filter_map(|(x, y)| self.pixel(x, y))
             .collect()
+    }
+
+    /// The pixels `(x, y)` of the regular subsample the image-wide
+    /// statistics read: raster indices `0`, `k`, `2 k`... below `width x
+    /// height`, `k = max(1, width height / SUBSAMPLE)`.
+    fn subsample_cells(&self) -> impl Iterator<Item = (usize, usize)> {
+        let (w, h) = (self.width.max(1), self.height);
+        let stride = ((w * h) / SUBSAMPLE).max(1);
+        let (dy, dx) = (stride / w, stride % w);
+        let (mut x, mut y) = (0, 0);
+        (0..(w * h).div_ceil(stride)).map(move |_| {
+            let cell = (x, y);
+            x += dx;
+            y += dy;
+            if x >= w {
+                x -= w;
+                y += 1;
+            }
+            cell
+        })
     }
 
     /// The variance of the rounding to [`Sampler::quantum`]'s steps `q`,
