@@ -445,7 +445,8 @@ fn to_gray(path: &Path, decoded: DynamicImage) -> Result<Image> {
         // The 256 levels divided once (the same values, bit for bit).
         DynamicImage::ImageLuma8(b) => {
             let levels: [f64; 256] = std::array::from_fn(|k| k as f64 / U8);
-            b.as_raw().iter().map(|&v| levels[usize::from(v)]).collect()
+            let raw = b.as_raw();
+            crate::pages::collect(raw.len(), raw.iter().map(|&v| levels[usize::from(v)]))
         }
         DynamicImage::ImageLumaA8(b) => gray_values(b.as_raw(), 2, U8),
         DynamicImage::ImageRgb8(b) => gray_values(b.as_raw(), 3, U8),
@@ -475,17 +476,18 @@ fn to_gray(path: &Path, decoded: DynamicImage) -> Result<Image> {
 /// the first channel of gray or gray+alpha pixels, the luma of the first
 /// three of RGB(A) ones.
 fn gray_values<T: Copy + Into<f64>>(samples: &[T], channels: usize, divisor: f64) -> Vec<f64> {
-    samples
-        .chunks_exact(channels)
-        .map(|p| {
+    let pixels = samples.chunks_exact(channels);
+    crate::pages::collect(
+        pixels.len(),
+        pixels.map(|p| {
             let gray = if channels >= 3 {
                 LUMA[0] * p[0].into() + LUMA[1] * p[1].into() + LUMA[2] * p[2].into()
             } else {
                 p[0].into()
             };
             gray / divisor
-        })
-        .collect()
+        }),
+    )
 }
 
 /// [`Image::new`], with the file named in a non-finite pixel's message.

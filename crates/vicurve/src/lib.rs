@@ -23,6 +23,7 @@ pub mod measurement;
 pub mod model;
 pub mod nurbs;
 pub mod objects;
+pub(crate) mod pages;
 pub mod psf;
 pub mod render;
 pub mod report;

@@ -136,8 +136,10 @@ pub(super) struct Candidate {
     gamma: f64,
     dgamma: f64,
     weight: f64,
-    /// The corners' wedges that reach the pixel (at most [`MAX_WEDGES`]).
-    wedges: [Option<CornerWedge>; MAX_WEDGES],
+    /// The corners' wedges that reach the pixel (at most [`MAX_WEDGES`]),
+    /// out of line: few pixels have any, and every candidate of a band is
+    /// written out before the band's columns are made of them.
+    wedges: Option<Box<[Option<CornerWedge>; MAX_WEDGES]>>,
     /// Their terms, summed.
     corner: f64,
 }
@@ -155,7 +157,12 @@ impl Candidate {
         wedges: impl Iterator<Item = CornerWedge>,
         (blur, anisotropy): (f64, Anisotropy),
     ) {
-        for (slot, w) in self.wedges.iter_mut().zip(wedges) {
+        let mut wedges = wedges.peekable();
+        if wedges.peek().is_none() {
+            return;
+        }
+        let slots = self.wedges.get_or_insert_with(Box::default);
+        for (slot, w) in slots.iter_mut().zip(wedges) {
             let term = w.term_for(blur, anisotropy);
             *slot = Some(w);
             self.corner += term;
@@ -203,7 +210,7 @@ impl Pixels<'_> {
             gamma,
             dgamma,
             weight: self.thin_weight() / jacobian,
-            wedges: [None; MAX_WEDGES],
+            wedges: None,
             corner: 0.0,
         }
     }
@@ -312,12 +319,12 @@ impl Band {
             corner_wedges: Vec::new(),
         };
         for (i, c) in rows.into_iter().flatten().enumerate() {
-            if c.wedges[0].is_some() {
+            if let Some(wedges) = &c.wedges {
                 if band.corner.is_empty() {
                     band.corner.resize(i, 0.0);
                 }
                 band.corner_wedges
-                    .extend(c.wedges.iter().flatten().map(|w| (i as u32, *w)));
+                    .extend(wedges.iter().flatten().map(|w| (i as u32, *w)));
             }
             if !band.corner.is_empty() {
                 band.corner.push(c.corner);

@@ -196,7 +196,8 @@ impl Sampler {
         // The image copied into the middle of the padded buffer, prefiltered
         // there in place for a cubic B-spline, then its border mirrored.
         let stride = w + 2 * PAD;
-        let mut coef = vec![0.0; stride * (h + 2 * PAD)];
+        let mut coef = crate::pages::with_capacity(stride * (h + 2 * PAD));
+        coef.resize(stride * (h + 2 * PAD), 0.0);
         let data = image.data();
         for (y, row) in data.chunks_exact(w).enumerate() {
             coef[(y + PAD) * stride + PAD..][..w].copy_from_slice(row);
