@@ -27,11 +27,8 @@ const TONE_PIXELS: usize = 40_000;
 /// own (a binned level of an image).
 pub(super) fn linear_sampler(sampler: &Sampler, tone: Tone) -> Result<Arc<Sampler>> {
     sampler.linear(tone, || {
-        let light = sampler
-            .image_pixels()
-            .iter()
-            .map(|&v| tone.to_linear(v))
-            .collect();
+        let pixels = sampler.image_pixels();
+        let light = crate::pages::collect(pixels.len(), pixels.iter().map(|&v| tone.to_linear(v)));
         let image = Image::new_finite(sampler.width(), sampler.height(), light)
             .map_err(|_| Error::invalid("tone", "the image's own pixels are not at hand"))?;
         Ok(Sampler::new(&image, sampler.kind()))

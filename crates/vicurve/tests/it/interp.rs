@@ -380,6 +380,20 @@ proptest! {
     }
 }
 
+proptest! {
+    /// The gray range is the 99.5th minus the 0.5th percentile of the
+    /// pixels (all of them in an image this small), each the value a sort
+    /// puts at that rank.
+    #[test]
+    fn the_gray_range_is_between_two_percentiles(img in random_image(40)) {
+        let mut sorted = img.data().to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let at = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+        let range = Sampler::new(&img, Interpolation::Bilinear).gray_range();
+        prop_assert_eq!(range.to_bits(), (at(0.995) - at(0.005)).to_bits());
+    }
+}
+
 /// A bilinear sampler shares the image's pixels; changing the image
 /// afterwards copies them first, so the sampler keeps what it was made from.
 #[test]

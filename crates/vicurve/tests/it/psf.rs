@@ -59,6 +59,36 @@ fn the_spread_of_a_blurred_edge_is_its_blur_and_the_pixel() {
     }
 }
 
+/// A long edge's spread is read from one band pixel in two (its band's
+/// projection is the estimate's cost) and stays its blur and the pixel's:
+/// a disc of radius 450 px, whose 8-px band holds 45,000 pixels.
+#[test]
+fn a_long_edge_is_read_on_half_its_band() {
+    let spec = RenderSpec {
+        foreground: 0.85,
+        background: 0.15,
+        ..disc(1000, (500.3, 499.6, 450.0), 1.0, 0.0, 0, Some(16))
+    };
+    let sampler = Sampler::new(&render(&spec).unwrap(), Interpolation::CubicBSpline);
+    let curve = InitialCurve::Circle {
+        cx: 500.3,
+        cy: 499.6,
+        r: 450.0,
+    }
+    .to_curve()
+    .unwrap();
+    let e = edge_spread(&sampler, &curve, 8.0).unwrap();
+    let band = 2.0 * 8.0 * std::f64::consts::TAU * 450.0;
+    println!(
+        "{} of {band:.0} band pixels, spread {:.4}",
+        e.pixels, e.sigma
+    );
+    assert!((e.pixels as f64) < 0.55 * band, "{} pixels", e.pixels);
+    // As `the_spread_of_a_blurred_edge_is_its_blur_and_the_pixel` at 1 px.
+    let expect = (1.0f64 + 1.0 / 12.0).sqrt();
+    assert!((e.sigma - expect).abs() <= 0.03 * expect, "{}", e.sigma);
+}
+
 #[test]
 fn the_shift_points_to_the_centre_of_curvature() {
     // Convex closed curve, outward normal: kappa < 0, the true boundary is
