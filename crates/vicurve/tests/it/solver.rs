@@ -244,6 +244,31 @@ proptest! {
         }
     }
 
+    /// The band of the matrix's own width (what `position_sigma` asks
+    /// for), taken by selected inversion, is the dense inverse's, open,
+    /// cyclic and tiny cyclic alike.
+    #[test]
+    fn the_selected_inverse_is_the_dense_inverse((n, p, c, off, margin, _b) in matrix_case()) {
+        let (m, d) = build(n, p, c, &off, &margin);
+        let f = BandCholesky::factor(&m).unwrap();
+        let inv = DenseCholesky::factor(&d, n).unwrap().inverse();
+        let scale = max_abs(&inv).max(1e-300);
+        let w = 2 * p + 1;
+        let band = f.inverse_band(p, c);
+        for i in 0..n {
+            for k in 0..w {
+                let j = i as isize + k as isize - p as isize;
+                let expected = match (c, usize::try_from(j)) {
+                    (true, _) => inv[i * n + j.rem_euclid(n as isize) as usize],
+                    (false, Ok(j)) if j < n => inv[i * n + j],
+                    _ => 0.0,
+                };
+                prop_assert!((band[i * w + k] - expected).abs() <= 1e-10 * scale,
+                    "({}, {}): {} vs {}", i, j, band[i * w + k], expected);
+            }
+        }
+    }
+
     #[test]
     fn negative_diagonal_is_reported((n, p, c, off, margin, _b) in matrix_case(), k in 0..60usize) {
         let k = k % n;
