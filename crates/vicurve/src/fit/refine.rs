@@ -25,6 +25,10 @@ pub(super) struct Fitted {
     pub lambda: Vec<f64>,
     /// Its last step.
     pub step: Step,
+    /// Whether `corr`'s noise variance was estimated at `lambda`
+    /// ([`Correlation::estimate_noise`]; not carried from another run):
+    /// then [`refine`] does not estimate it again.
+    pub noise_estimated: bool,
 }
 
 /// The band a refinement builds: half-width (pixels) and profile.
@@ -95,6 +99,7 @@ pub(super) fn refine(
         mut corr,
         mut lambda,
         mut step,
+        noise_estimated,
     } = fit;
     let closed = reference.is_closed();
     let min_el = super::schedule::min_elements(closed, config.degree, true);
@@ -118,7 +123,9 @@ pub(super) fn refine(
         Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => Some(blur),
         Profile::Paper { .. } => None,
     };
-    corr.estimate_noise(&lambda, sampler);
+    if !noise_estimated {
+        corr.estimate_noise(&lambda, sampler);
+    }
     // A step on references of its own is the last one (onto `shortest`).
     while moved.is_none() {
         let coarse = corr.basis().element_length();
@@ -269,7 +276,12 @@ pub(super) fn refine(
         }
     }
     Ok(Refined {
-        fit: Fitted { corr, lambda, step },
+        fit: Fitted {
+            corr,
+            lambda,
+            step,
+            noise_estimated: true,
+        },
         iterations,
         shape_error,
         reference: moved,

@@ -869,9 +869,17 @@ impl Schedule<'_> {
         // pair, and so do the next.
         let test_levels = o == Outcome::Converged && !st.levels_tested;
         st.levels_tested |= test_levels;
-        if test_levels && corr.varying_levels() && !corr.levels_significant(&lambda, self.sampler) {
-            self.config.levels = LevelModel::Global;
-            self.refit_global(st, (&mut corr, &mut lambda), basis, tolerance);
+        // The levels' test estimates the noise on this fit when no stage
+        // noise was carried into it: the refinement below reuses it.
+        let mut noise_estimated = false;
+        if test_levels && corr.varying_levels() {
+            let carried = corr.noise_var().is_some();
+            if corr.levels_significant(&lambda, self.sampler) {
+                noise_estimated = !carried && corr.noise_var().is_some();
+            } else {
+                self.config.levels = LevelModel::Global;
+                self.refit_global(st, (&mut corr, &mut lambda), basis, tolerance);
+            }
         }
         let auto_elements = matches!(st.stage.elements, Elements::Auto { .. });
         if let (Elements::Auto { shortest, .. }, Some(step), None) =
@@ -879,7 +887,12 @@ impl Schedule<'_> {
         {
             let refined = refine(
                 &self.current,
-                Fitted { corr, lambda, step },
+                Fitted {
+                    corr,
+                    lambda,
+                    step,
+                    noise_estimated,
+                },
                 shortest,
                 self.sampler,
                 &self.config,
