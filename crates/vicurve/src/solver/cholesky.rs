@@ -200,17 +200,7 @@ impl BandCholesky {
         let (n, w) = (self.n, 2 * p + 1);
         let mut out = vec![0.0; n * w];
         for (i, row) in out.chunks_exact_mut(w).enumerate() {
-            for (k, v) in row.iter_mut().enumerate() {
-                let j = i as isize + k as isize - p as isize;
-                let j = if cyclic {
-                    j.rem_euclid(n as isize)
-                } else if (0..n as isize).contains(&j) {
-                    j
-                } else {
-                    continue;
-                };
-                *v = inverse.get(i, j as usize);
-            }
+            fill_band_row(row, i, (n, p, cyclic), |j| inverse.get(i, j));
         }
         out
     }
@@ -226,17 +216,7 @@ impl BandCholesky {
                 col.fill(0.0);
                 col[i] = 1.0;
                 self.solve_in_place(col);
-                for (k, v) in row.iter_mut().enumerate() {
-                    let j = i as isize + k as isize - p as isize;
-                    let j = if cyclic {
-                        j.rem_euclid(n as isize)
-                    } else if (0..n as isize).contains(&j) {
-                        j
-                    } else {
-                        continue;
-                    };
-                    *v = col[j as usize];
-                }
+                fill_band_row(row, i, (n, p, cyclic), |j| col[j]);
             },
         );
         out
@@ -369,6 +349,28 @@ impl SelectedInverse {
         } else {
             self.band[i * (self.q + 1) + j - i] = v;
         }
+    }
+}
+
+/// Row `i` of [`BandCholesky::inverse_band`]'s output (`2 p + 1` slots,
+/// columns `i - p..=i + p` of an `n x n` matrix, taken modulo `n` when
+/// `cyclic`, left as they are past either end otherwise) from `entry(j)`.
+fn fill_band_row(
+    row: &mut [f64],
+    i: usize,
+    (n, p, cyclic): (usize, usize, bool),
+    entry: impl Fn(usize) -> f64,
+) {
+    for (k, v) in row.iter_mut().enumerate() {
+        let j = i as isize + k as isize - p as isize;
+        let j = if cyclic {
+            j.rem_euclid(n as isize)
+        } else if (0..n as isize).contains(&j) {
+            j
+        } else {
+            continue;
+        };
+        *v = entry(j as usize);
     }
 }
 
