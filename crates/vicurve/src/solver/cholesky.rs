@@ -188,10 +188,10 @@ impl BandCholesky {
     ///
     /// When the band asked for lies within the factor's pattern (`p` up to
     /// its half-bandwidth, or a dense factor), by selected inversion
-    /// ([`SelectedInverse`]): `O(n (q + a)^2)` for `a` arrow rows. A wider
-    /// band takes one solve per row (row `i` of the symmetric inverse is
-    /// its column `i`), `O(n^2 q)`: a 456-unknown star's refinement spent
-    /// 5 ms on those.
+    /// (Takahashi's recurrence on the factor's pattern), `O(n (q + a)^2)`
+    /// for `a` arrow rows. A wider band takes one solve per row (row `i`
+    /// of the symmetric inverse is its column `i`), `O(n^2 q)`: a
+    /// 456-unknown star's refinement spent 5 ms on those.
     pub fn inverse_band(&self, p: usize, cyclic: bool) -> Vec<f64> {
         if p > self.q && self.m > 0 {
             return self.inverse_band_by_solves(p, cyclic);
