@@ -13,6 +13,7 @@
 
 /// Buffers smaller than this (bytes) stay on ordinary pages: they span at
 /// most one huge page, which would save a few hundred faults at best.
+#[cfg_attr(not(target_os = "linux"), allow(dead_code))]
 const HUGE_MIN_BYTES: usize = 4 << 20;
 
 /// Size of a huge page on the platforms asked for them, bytes.
@@ -24,6 +25,7 @@ const HUGE_PAGE: usize = 2 << 20;
 /// it. Fill it with `extend` or `resize`.
 pub(crate) fn with_capacity<T>(n: usize) -> Vec<T> {
     let v = Vec::with_capacity(n);
+    #[cfg(target_os = "linux")]
     advise(&v);
     v
 }
@@ -56,10 +58,6 @@ fn advise<T>(v: &Vec<T>) {
         }
     }
 }
-
-/// Elsewhere: ordinary pages.
-#[cfg(not(target_os = "linux"))]
-fn advise<T>(_: &Vec<T>) {}
 
 #[cfg(test)]
 mod tests {
