@@ -219,8 +219,12 @@ def test_the_fit_releases_the_gil():
     span = {}
 
     def work():
+        # Fits until a quarter second has passed, however fast one is
+        # (one took 90 to 130 ms on the CI machine): the ticks below need
+        # a span to fall in.
         span["start"] = time.perf_counter()
-        vicurve.measure(image, vicurve.Circle(512, 512, 300))
+        while time.perf_counter() - span["start"] < 0.25:
+            vicurve.measure(image, vicurve.Circle(512, 512, 300))
         span["end"] = time.perf_counter()
 
     worker = threading.Thread(target=work)
