@@ -72,10 +72,21 @@ impl PyMeasurement {
 
     /// Standard deviation of each sample's position along the normal,
     /// pixels: the image noise's, combined with the model misfit's where
-    /// the model misfits (N; NaN when no stage completed).
+    /// the model misfits (N; NaN when no stage completed). A shift common
+    /// to every sample is not in it: see `sigma_shift`.
     #[getter]
     fn sigma<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.column(|s| s.sigma).into_pyarray(py)
+    }
+
+    /// Standard deviation of a shift of the whole curve along its normals,
+    /// common to every sample and not in `sigma`, pixels: what reading
+    /// the tone curve from the edge leaves uncertain (0 for a linear image
+    /// or a tone curve given). One sample's whole uncertainty is
+    /// `hypot(sigma, sigma_shift)`.
+    #[getter]
+    fn sigma_shift(&self) -> f64 {
+        self.measurement.sigma_shift()
     }
 
     /// The image noise's share of `sigma`, pixels (N; NaN when no stage

@@ -287,8 +287,13 @@ def test_an_encoded_image_is_measured_in_linear_light():
     assert auto.tone != "linear"
     assert auto.tone_estimate["evidence"] > 25
     assert abs(vicurve.eval(auto.points, truth)["bias"]) < 0.05
+    # The reading's uncertainty shifts the whole curve: reported once,
+    # not in the samples' sigma.
+    assert auto.sigma_shift == auto.tone_estimate["position_sd"] > 0
+    assert auto.sigma_shift > 2 * float(auto.sigma.max())
     told = vicurve.measure(image, start, tone="srgb")
     assert told.tone == "srgb" and told.tone_estimate is None
+    assert told.sigma_shift == 0
     assert abs(vicurve.eval(told.points, truth)["bias"]) < 5e-3
     linear = vicurve.measure(image, start, tone="linear")
     assert vicurve.eval(linear.points, truth)["bias"] > 0.1

@@ -223,7 +223,11 @@ pub struct Sample {
     /// model-misfit term where the image's edge departs from the model
     /// (see [`Sample::misfit`]); equal to `sigma_noise` elsewhere. It does
     /// not include a bias that the residuals cannot show (a model that
-    /// fits the image exactly but places the edge wrongly).
+    /// fits the image exactly but places the edge wrongly), nor the
+    /// uncertainty common to every sample ([`Measurement::sigma_shift`]):
+    /// `sigma` is what differs from sample to sample, and averages down
+    /// over independent samples; one sample's whole uncertainty is
+    /// `sigma` and `sigma_shift` in quadrature.
     pub sigma: f64,
     /// The noise term alone: the Gauss–Newton covariance of the last
     /// stage, pixels (method, section 8); NaN without a fit.
@@ -385,6 +389,22 @@ impl Measurement {
     /// Total Gauss–Newton iterations over all stages.
     pub fn iterations(&self) -> usize {
         self.stages.iter().map(|s| s.iterations).sum()
+    }
+
+    /// The standard deviation of a shift of the whole curve along its
+    /// normals, common to every sample, pixels: what reading the tone
+    /// curve from the edge leaves uncertain
+    /// ([`ToneEstimate::position_sd`]) when the curve was measured in the
+    /// linear light of that reading; 0 otherwise (a linear image, or a
+    /// tone curve given). Not in [`Sample::sigma`]: a term every sample
+    /// shares does not average down, so a fit to the samples (a circle, a
+    /// width) adds it to its own deviation, as
+    /// [`crate::derived::closed_measures`] does for the radius.
+    pub fn sigma_shift(&self) -> f64 {
+        match self.tone_estimate {
+            Some(e) if !self.tone.is_identity() => e.position_sd,
+            _ => 0.0,
+        }
     }
 
     /// Residual RMS of the last stage, gray levels.

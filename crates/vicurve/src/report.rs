@@ -78,6 +78,11 @@ pub struct ResultFile<'a> {
     pub samples: usize,
     /// The samples where the model misfits (their `sigma` covers it).
     pub misfit: MisfitSummary,
+    /// The standard deviation of a shift of the whole curve along its
+    /// normals, common to every sample and not in their `sigma`, pixels
+    /// ([`Measurement::sigma_shift`]: the tone curve's reading; 0 when
+    /// none).
+    pub sigma_shift: f64,
     /// Per-stage history.
     pub stages: &'a [StageReport],
     /// Stages of the default schedule that were skipped, with the reason.
@@ -177,6 +182,7 @@ impl<'a> ResultFile<'a> {
             tone_estimate: m.tone_estimate,
             samples: m.samples.len(),
             misfit: m.misfit_summary(),
+            sigma_shift: m.sigma_shift(),
             stages: &m.stages,
             skipped_stages: &m.skipped,
             corners_found: &m.corners_found,

@@ -183,6 +183,12 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
             mean
         );
     }
+    let shift = m.sigma_shift();
+    if shift > 0.0 {
+        println!(
+            "shift:       {shift:.2e} px (uncertainty common to every sample, not in their sigma: the tone reading; add it in quadrature for one sample)"
+        );
+    }
     let misfit = m.misfit_summary();
     if misfit.flagged > 0 {
         println!(
@@ -199,7 +205,7 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
 fn print_tone(m: &Measurement) {
     match (m.tone, m.tone_estimate) {
         (t, Some(e)) if !t.is_identity() => println!(
-            "tone:        read from the edge as {t} (power law {:.3}, evidence {:.0} noise variances); measured again in linear light, about {:+.3} px along the normals; sigma includes the reading's uncertainty, {:.1e} px for the whole curve (--tone CURVE if you know it)",
+            "tone:        read from the edge as {t} (power law {:.3}, evidence {:.0} noise variances); measured again in linear light, about {:+.3} px along the normals; the reading leaves {:.1e} px for the whole curve (shift below; --tone CURVE if you know it)",
             e.gamma, e.evidence, e.shift, e.position_sd
         ),
         (t, _) if !t.is_identity() => println!("tone:        {t} undone before measuring"),

@@ -37,9 +37,9 @@ pub struct ClosedMeasures {
 /// [`crate::derived`]). A curve measured in linear light by a tone curve
 /// read from its own edge ([`Measurement::tone_estimate`]) may be off by
 /// the reading's uncertainty all round: the radius and the semi-axes carry
-/// it too ([`crate::tone::ToneEstimate::position_sd`], in quadrature; the
-/// fits' own deviations, from their residuals, cannot see a term common to
-/// every sample).
+/// it too ([`Measurement::sigma_shift`], in quadrature; the fits' own
+/// deviations, from their residuals, cannot see a term common to every
+/// sample).
 ///
 /// Errors: [`Error::InvalidCurve`] for an open curve, or when the samples
 /// determine no circle or ellipse.
@@ -47,11 +47,10 @@ pub fn closed_measures(m: &Measurement) -> Result<ClosedMeasures> {
     let independent = m.stages.last().map(|s| s.elements as f64);
     let sigma: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
     let mut c = measures(&m.curve, &m.points(), Some(&sigma), independent)?;
-    if let (false, Some(e)) = (m.tone.is_identity(), m.tone_estimate) {
-        c.circle.sigma_r = c.circle.sigma_r.hypot(e.position_sd);
-        c.ellipse.sigma_a = c.ellipse.sigma_a.hypot(e.position_sd);
-        c.ellipse.sigma_b = c.ellipse.sigma_b.hypot(e.position_sd);
-    }
+    let shift = m.sigma_shift();
+    c.circle.sigma_r = c.circle.sigma_r.hypot(shift);
+    c.ellipse.sigma_a = c.ellipse.sigma_a.hypot(shift);
+    c.ellipse.sigma_b = c.ellipse.sigma_b.hypot(shift);
     Ok(c)
 }
 

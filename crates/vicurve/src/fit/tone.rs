@@ -64,17 +64,10 @@ pub(super) fn with_estimate(
     let again = linear_sampler(sampler, e.curve).and_then(|linear| measure(&linear, reference));
     match again {
         Ok(mut linear) if !matches!(linear.outcome, Outcome::Diverged { .. }) => {
+            // What the reading leaves uncertain moves the whole edge:
+            // `Measurement::sigma_shift`, not the samples' own sigma.
             linear.tone = e.curve;
             linear.tone_estimate = Some(e);
-            // What the reading leaves uncertain moves the whole edge: it
-            // goes into every sample's model term.
-            let sd = e.position_sd;
-            if sd > 0.0 {
-                for s in &mut linear.samples {
-                    s.sigma = s.sigma.hypot(sd);
-                    s.misfit |= sd > s.sigma_noise;
-                }
-            }
             linear
         }
         _ => m,

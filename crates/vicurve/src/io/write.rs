@@ -9,7 +9,9 @@ use std::path::Path;
 /// Write the samples as CSV: the header
 /// `s,x,y,nx,ny,sigma,weight,sigma_noise,misfit` (a contract: other tools
 /// read the columns by these names), then one row per sample (`sigma`: the
-/// position's uncertainty in px, model misfit included; `weight`: the share
+/// position's uncertainty in px, model misfit included, a shift common to
+/// the whole curve not ([`Measurement::sigma_shift`], in the JSON);
+/// `weight`: the share
 /// of the band kept by the robust weights there, 1 where nothing was
 /// down-weighted; `sigma_noise`: the noise's share of `sigma`; `misfit`: 1
 /// where the model misfits, else 0).

@@ -31,8 +31,8 @@ const POOLED_SDS: f64 = 5.0;
 /// above the least an encoding has (`tone.rs`). The curve is the one most
 /// of the objects read as encoded took, else that averaged power law.
 /// Each object measured again keeps its own reading in `tone_estimate`,
-/// with that curve and, as its `position_sd` (also in every sample's
-/// `sigma`, the radius and the semi-axes), the median of those of the
+/// with that curve and, as its `position_sd` (the measurement's
+/// `sigma_shift`, also in the radius and the semi-axes), the median of those of the
 /// objects that took the curve, or a quarter of its own shift.
 pub(super) fn agreed(
     image: &Image,
@@ -98,10 +98,6 @@ pub(super) fn agreed(
                         position_sd: sd,
                         ..e
                     });
-                    for s in &mut m.samples {
-                        s.sigma = s.sigma.hypot(sd);
-                        s.misfit |= sd > s.sigma_noise;
-                    }
                     if m.curve.is_closed() {
                         r.closed = closed_measures(m).ok();
                     }

@@ -3,7 +3,8 @@
 //! JPEG file does. Measured as if linear, the edge moved towards its dark
 //! side by about a quarter of its blur with a `sigma` of 3e-3 px; the
 //! estimate finds the encoding, the edge is measured again in linear
-//! light, and `sigma` covers what the estimate leaves uncertain.
+//! light, and `sigma_shift` covers what the estimate leaves uncertain
+//! while the samples' `sigma` keeps describing their scatter.
 
 use vicurve::curve::InitialCurve;
 use vicurve::derived::closed_measures;
@@ -57,9 +58,12 @@ fn mean_error(m: &Measurement, spec: &RenderSpec) -> f64 {
 /// Measured as linear, each encoded disc is 0.2 to 0.3 px too large, at
 /// tens of its sigma. With the default tone (auto), the encoding is found
 /// and the edge measured again in linear light: within 0.05 px of the
-/// truth and within 3 of its sigma, whichever standard encoding the
-/// estimate takes (sRGB, 2.2 and 2.4 bend the levels 0.2 to 0.8 almost
-/// alike, and the noise picks among them).
+/// truth and within 3 of its shift's sigma, whichever standard encoding
+/// the estimate takes (sRGB, 2.2 and 2.4 bend the levels 0.2 to 0.8
+/// almost alike, and the noise picks among them). That uncertainty is
+/// common to the whole curve: the samples' own sigma still matches their
+/// scatter about their mean (it was 5 times that scatter when the
+/// shift's uncertainty was folded into every sample).
 #[test]
 fn an_encoded_edge_is_measured_in_linear_light() {
     for (tone, seed) in [(Tone::Srgb, 3), (Tone::Gamma(2.2), 4)] {
@@ -71,18 +75,23 @@ fn an_encoded_edge_is_measured_in_linear_light() {
         let (_, raw, raw_sigma) = measured(&spec, &linear);
         let (m, bias, sigma) = measured(&spec, &FitConfig::default());
         let e = m.tone_estimate.expect("an estimate");
+        let shift = m.sigma_shift();
+        let scatter = scatter(&m, &spec, bias);
         println!(
             "{tone}: as linear {raw:+.4} px (sigma {raw_sigma:.4}); auto: {} gamma {:.3} \
-             evidence {:.0}, bias {bias:+.4} px, sigma {sigma:.4}",
+             evidence {:.0}, bias {bias:+.4} px (shift's sigma {shift:.4}), scatter \
+             {scatter:.4}, sigma {sigma:.4}",
             m.tone, e.gamma, e.evidence
         );
         assert!(raw.abs() > 0.2 && raw.abs() > 20.0 * raw_sigma, "{raw}");
         assert!(!m.tone.is_identity(), "{:?}", m.tone);
         assert!(e.evidence > 100.0 && (1.9..2.6).contains(&e.gamma), "{e:?}");
+        assert_eq!(shift, e.position_sd);
         assert!(
-            bias.abs() < 0.05 && bias.abs() < 3.0 * sigma,
-            "{bias} {sigma}"
+            bias.abs() < 0.05 && bias.abs() < 3.0 * shift.hypot(sigma),
+            "{bias} {shift}"
         );
+        assert!((0.7..1.4).contains(&(scatter / sigma)), "{scatter} {sigma}");
         // The radius carries the reading's uncertainty, common to every
         // sample (the circle fit alone, from its residuals, cannot see it).
         let circle = closed_measures(&m).unwrap().circle;
@@ -99,6 +108,18 @@ fn an_encoded_edge_is_measured_in_linear_light() {
     }
 }
 
+/// The RMS of `m`'s signed errors against `spec`'s truth about their mean
+/// `bias`, pixels.
+fn scatter(m: &Measurement, spec: &RenderSpec, bias: f64) -> f64 {
+    let n = m.samples.len() as f64;
+    let sum: f64 = m
+        .samples
+        .iter()
+        .map(|s| (spec.shape.signed_distance(s.x, s.y) - bias).powi(2))
+        .sum();
+    (sum / n).sqrt()
+}
+
 /// Told the encoding, the measurement is that of a linear image: bias
 /// within 3e-3 px and an honest sigma.
 #[test]
@@ -109,13 +130,7 @@ fn a_known_encoding_is_undone_exactly() {
         ..FitConfig::default()
     };
     let (m, bias, sigma) = measured(&spec, &config);
-    let n = m.samples.len() as f64;
-    let errors: Vec<f64> = m
-        .samples
-        .iter()
-        .map(|s| spec.shape.signed_distance(s.x, s.y))
-        .collect();
-    let scatter = (errors.iter().map(|e| (e - bias).powi(2)).sum::<f64>() / n).sqrt();
+    let scatter = scatter(&m, &spec, bias);
     println!("srgb given: bias {bias:+.5} px, scatter {scatter:.5}, sigma {sigma:.5}");
     assert_eq!(m.tone, Tone::Srgb);
     assert!(m.tone_estimate.is_none());

@@ -102,7 +102,10 @@ fn conventions(s: &mut String) {
          - **Scoring** (as `vicurve eval`): signed normal distances of the output samples to \
          the exact curve (`vicurve::truth`), px; bias = mean, scatter = RMS about the mean, \
          max = largest |distance|; length = measured / true curve length (above 1 for a \
-         loop or a wiggle); sigma = RMS of the reported per-sample sigma; coverage: \
+         loop or a wiggle); sigma = RMS of the reported per-sample sigma (the CSV's \
+         `sigma_shift` is the reported uncertainty of a shift common to the whole curve, \
+         which the encoded images' tone reading leaves: not in the samples' sigma, not \
+         scored); coverage: \
          closed curves, the fraction of 360 sectors about the centre with a sample within \
          1 px of the curve; open curves, the x range of such samples over the image width, and \
          the border gap = the larger distance from an end to the outermost pixel centre. Time: \
@@ -181,6 +184,30 @@ fn summary(s: &mut String, rows: &[Row]) {
         );
     }
     let _ = writeln!(s);
+    shifts(s, rows);
+}
+
+/// What the cases that report a shift common to the whole curve (the
+/// encoded images' tone reading) say of their bias.
+fn shifts(s: &mut String, rows: &[Row]) {
+    let shifted: Vec<&Row> = rows.iter().filter(|r| r.sigma_shift > 0.0).collect();
+    if shifted.is_empty() {
+        return;
+    }
+    let within = shifted
+        .iter()
+        .filter(|r| r.bias.abs() <= 3.0 * r.sigma_shift.hypot(r.bias_noise))
+        .count();
+    let rms =
+        (shifted.iter().map(|r| r.sigma_shift.powi(2)).sum::<f64>() / shifted.len() as f64).sqrt();
+    let _ = writeln!(
+        s,
+        "{} cases report a shift of the whole curve (`sigma_shift`, RMS {rms:.1e} px: the \
+         tone curve read from the edge, where sRGB and the power laws 2.2 and 2.4 are hard \
+         to tell apart); their |bias| is within 3 x that sigma (and `bias_noise`, in \
+         quadrature) in {within} of them.\n",
+        shifted.len()
+    );
 }
 
 fn failures(s: &mut String, rows: &[Row]) {

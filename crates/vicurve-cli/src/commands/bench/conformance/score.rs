@@ -65,6 +65,10 @@ pub struct Row {
     pub max_abs: f64,
     /// RMS of the reported per-sample sigma, px.
     pub sigma_rms: f64,
+    /// The reported uncertainty of a shift common to the whole curve
+    /// (`Measurement::sigma_shift`: the tone curve's reading), px; not in
+    /// the samples' sigma nor in the criteria.
+    pub sigma_shift: f64,
     /// Observed scatter / reported sigma.
     pub scatter_over_sigma: f64,
     /// Output samples.
@@ -107,6 +111,7 @@ struct Figures {
     scatter: f64,
     max_abs: f64,
     sigma_rms: f64,
+    sigma_shift: f64,
     samples: usize,
     length_ratio: f64,
     coverage: f64,
@@ -119,6 +124,7 @@ impl Figures {
         scatter: f64::NAN,
         max_abs: f64::NAN,
         sigma_rms: f64::NAN,
+        sigma_shift: f64::NAN,
         samples: 0,
         length_ratio: f64::NAN,
         coverage: 0.0,
@@ -189,6 +195,7 @@ fn figures(m: &Measurement, shape: &Shape, width: usize) -> Figures {
         scatter: stats.scatter,
         max_abs: stats.max_abs,
         sigma_rms,
+        sigma_shift: m.sigma_shift(),
         samples: points.len(),
         length_ratio: m.length() / shape.length(),
         coverage,
@@ -307,6 +314,7 @@ fn row(case: &Case, outcome: &str, message: String, f: Figures, seconds: f64) ->
         scatter: f.scatter,
         max_abs: f.max_abs,
         sigma_rms: f.sigma_rms,
+        sigma_shift: f.sigma_shift,
         scatter_over_sigma: ratio,
         samples: f.samples,
         length_ratio: f.length_ratio,
@@ -351,6 +359,7 @@ impl Row {
             ("scatter", f(self.scatter)),
             ("max_abs", f(self.max_abs)),
             ("sigma_rms", f(self.sigma_rms)),
+            ("sigma_shift", f(self.sigma_shift)),
             ("scatter_over_sigma", f(self.scatter_over_sigma)),
             ("samples", self.samples.to_string()),
             ("length_ratio", self.length_ratio.to_string()),
@@ -384,10 +393,15 @@ impl Row {
         }
         if !self.bias_ok {
             r.push(format!(
-                "|bias| {:.2e} > {:.0e} + {BIAS_NOISE_SDS} x {:.1e}",
+                "|bias| {:.2e} > {:.0e} + {BIAS_NOISE_SDS} x {:.1e}{}",
                 self.bias.abs(),
                 self.bias_limit,
-                self.bias_noise
+                self.bias_noise,
+                if self.sigma_shift > 0.0 {
+                    format!(" (reported shift sigma {:.1e})", self.sigma_shift)
+                } else {
+                    String::new()
+                }
             ));
         }
         if !self.max_ok {
