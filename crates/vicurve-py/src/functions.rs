@@ -148,7 +148,8 @@ pub(crate) fn stages_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
 ///   lines (such as `synth("paper-disc")`).
 /// - `levels`: the virtual image's gray levels, "varying" (they follow
 ///   uneven light along the curve; kept only when they explain the image
-///   better than noise would), "varying:LEN" (elements of LEN px) or
+///   better than noise would; elements of 128 px, or shorter where the
+///   light changes faster), "varying:LEN" (elements of LEN px at most) or
 ///   "global" (one pair, the paper's).
 /// - `tone`: how the gray levels relate to the light: "auto" (the tone
 ///   curve is estimated around a silhouette's edge and, when the image is

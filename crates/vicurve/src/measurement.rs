@@ -177,9 +177,11 @@ pub enum RunKind {
     /// The fit on a reference curve (the stage's first, or one after a
     /// re-reference or a settling step).
     Reference,
-    /// The refit with a global pair of gray levels after varying levels
-    /// were found not significant.
-    GlobalLevels,
+    /// The refit with other gray levels after the stage's test of them:
+    /// the global pair (the varying levels were not significant) or
+    /// varying levels of shorter elements.
+    #[serde(alias = "global_levels")]
+    Levels,
     /// A refit with halved elements (automatic element length).
     Refine,
     /// A refit with robust weights.

@@ -108,9 +108,10 @@ pub struct BandArgs {
     #[arg(long, default_value_t = 10.0, value_name = "PX")]
     pub mesh_size: f64,
     /// Gray levels of the virtual image: `varying` (dark level and contrast
-    /// follow uneven light along the curve, elements of 128 px; the
-    /// default), `varying:LEN` (elements of LEN px) or `global` (one pair
-    /// for the whole curve, the paper's).
+    /// follow uneven light along the curve, elements of 128 px, or of a
+    /// half or a quarter of that when the light changes faster; the
+    /// default), `varying:LEN` (elements of LEN px at most) or `global`
+    /// (one pair for the whole curve, the paper's).
     #[arg(long, default_value = "varying", value_name = "MODEL")]
     pub levels: String,
     /// Corners: arc lengths (pixels) along the initial curve, from its

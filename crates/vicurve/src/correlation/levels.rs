@@ -42,10 +42,14 @@ pub enum LevelModel {
     /// two such elements (four, closed) gets the global pair. So does a
     /// measurement whose first converged stage finds that the varying
     /// levels explain no more than noise would (even light): they would
-    /// only cost precision (see `Correlation::levels_significant`).
+    /// only cost precision. The pixel-edge stage tries again, with
+    /// elements of `element_length` and of a half and a quarter of it, and
+    /// takes them when they explain significantly more (light that changes
+    /// faster along the curve, as a star's lobes run in and out of a
+    /// vignetted field; see `Correlation::levels_needed`).
     Varying {
         /// Length of the levels' elements along the curve, pixels (`>= 8`):
-        /// the scale over which the light may change.
+        /// the longest scale over which the light may change.
         element_length: f64,
     },
 }

@@ -80,7 +80,7 @@ use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Polarity;
 use crate::virtual_image::Profile;
-use levels::LevelModel;
+use levels::{LevelBasis, LevelModel};
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -359,6 +359,10 @@ pub(crate) struct Correlation {
     /// Gray levels that vary along the curve ([`LevelModel::Varying`]);
     /// `None`: the global pair.
     varying: Option<Box<varying::Varying>>,
+    /// With the global pair and the pixel-edge profile: the light's tilt
+    /// across the band, already taken out of the pushed values (see
+    /// `new_pushed`); the varying levels keep theirs.
+    global_tilt: Option<MeasuredTilt>,
     /// The band of `M0^-1` ([`BandCholesky::inverse_band`]), made on the
     /// first [`Self::position_sigma`].
     inverse_band: OnceLock<Vec<f64>>,
@@ -423,6 +427,7 @@ impl Correlation {
             .map(Box::new);
         Ok(Correlation {
             varying,
+            global_tilt: None,
             count,
             pixels: band.inside() as f64,
             y1,
@@ -520,10 +525,14 @@ impl Correlation {
         self.robust.iter().any(|&w| w != 1.0)
     }
 
-    /// The light's tilt this system measured or took (`None` without
-    /// varying levels or a pushed profile).
+    /// The light's tilt this system measured or took (`None` without a
+    /// pixel-edge profile, or on a curve too short for the levels'
+    /// elements).
     pub fn measured_tilt(&self) -> Option<&MeasuredTilt> {
-        self.varying.as_ref()?.measured_tilt.as_ref()
+        match &self.varying {
+            Some(var) => var.measured_tilt.as_ref(),
+            None => self.global_tilt.as_ref(),
+        }
     }
 
     /// [`Correlation::new`] for the pushed profile (module docs): the
@@ -552,23 +561,50 @@ impl Correlation {
                 half_width: band.half_width(),
             });
         }
-        let values: Vec<f64> = read.into_iter().flatten().collect();
+        let mut values: Vec<f64> = read.into_iter().flatten().collect();
         let mut corr = Correlation::new(band, basis, levels)?;
-        corr.pushed = Some(values);
-        // With varying levels, the light's tilt across the band too.
-        if let (Some(var), Profile::PixelEdge { blur, .. }) =
-            (corr.varying.as_deref_mut(), corr.band.profile())
-        {
-            let measured = match known_tilt {
-                Some(m) if m.serves(&var.levels, blur) => m.clone(),
-                _ => tilt::estimate(&corr.band, sampler, &var.levels, blur),
-            };
-            var.tilt = measured
-                .coefs
-                .as_deref()
-                .and_then(|c| tilt::at_pixels(&var.levels, c));
+        let Profile::PixelEdge { blur, .. } = corr.band.profile() else {
+            corr.pushed = Some(values);
+            return Ok(corr);
+        };
+        // The light's tilt across the band too, on the levels' default
+        // elements whatever the levels' own: measured on shorter ones
+        // (a vignetted star's 32 px), it was noisier and the star's
+        // scatter larger (1.5e-2 against 1.1e-2 px at 5 % falloff).
+        let Some(lb) = LevelModel::default()
+            .basis(corr.basis.length(), corr.basis.is_closed())
+            .map(|b| LevelBasis::new(b, &corr.band.s))
+        else {
+            corr.pushed = Some(values);
+            return Ok(corr);
+        };
+        let measured = match known_tilt {
+            Some(m) if m.serves(&lb, blur) => m.clone(),
+            _ => tilt::estimate(&corr.band, sampler, &lb, blur),
+        };
+        let tau = measured
+            .coefs
+            .as_deref()
+            .and_then(|c| tilt::at_pixels(&lb, c));
+        if let Some(var) = corr.varying.as_deref_mut() {
+            // Varying levels: a factor of the virtual image.
+            var.tilt = tau;
             var.measured_tilt = Some(measured);
+        } else {
+            // The global pair (even light along the curve, as the levels'
+            // test found, or asked for): the light can still change across
+            // it (a vignetting lens centred on a round part). Taken out of
+            // the pixels' values: `f / (1 + tau r)` against `a + c gamma`
+            // is `f` against `(a + c gamma) (1 + tau r)` up to `tau U`, a
+            // change of the levels' scale the levels absorb.
+            if let Some(tau) = tau {
+                for ((v, t), r) in values.iter_mut().zip(&tau).zip(&corr.band.r) {
+                    *v /= 1.0 + t * r;
+                }
+            }
+            corr.global_tilt = Some(measured);
         }
+        corr.pushed = Some(values);
         Ok(corr)
     }
 
@@ -714,77 +750,19 @@ impl Correlation {
     ) -> Option<f64> {
         let values = self.pushed.as_deref()?;
         let band = &self.band;
-        let gamma_at = |i: usize| gamma(i, band.r[i] - self.displacement_at(i, lambda));
-        let stride = stride.max(1);
-        let count = values.len().div_ceil(stride);
-        if let Some(var) = &self.varying {
-            let scale = |i: usize| self.tilt_factor(i, self.displacement_at(i, lambda));
-            // Dense normal equations of the levels (allocates: called a few
-            // times per blur fit, not per iteration).
-            let lb = &var.levels;
-            let dim = lb.dim();
-            let (blocks, mut rhs, sff) = chunked_sum(
-                count,
-                |range| {
-                    let mut blocks = vec![0.0; lb.blocks_len()];
-                    let mut rhs = vec![0.0; dim];
-                    let mut sff = 0.0;
-                    for i in range.map(|k| k * stride) {
-                        let (w, f) = (band.weight[i], values[i]);
-                        if w == 0.0 {
-                            continue;
-                        }
-                        let [f0, f1] = levels::features(gamma_at(i));
-                        let k = scale(i);
-                        lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut blocks), &mut rhs);
-                        sff += w * f * f;
-                    }
-                    (blocks, rhs, sff)
-                },
-                |total, part| {
-                    total.0.iter_mut().zip(&part.0).for_each(|(t, p)| *t += p);
-                    total.1.iter_mut().zip(&part.1).for_each(|(t, p)| *t += p);
-                    total.2 += part.2;
-                },
-            )?;
-            let mut mat = vec![0.0; dim * dim];
-            lb.scatter(&blocks, &mut mat);
-            let b = rhs.clone();
-            DenseCholesky::factor(&mat, dim)
-                .ok()?
-                .solve_in_place(&mut rhs);
-            let fit: f64 = b.iter().zip(&rhs).map(|(u, v)| u * v).sum();
-            return Some((sff - fit).max(0.0));
-        }
-        let sums = chunked_sum(
-            count,
-            |range| {
-                let mut acc = [0.0; 6];
-                for i in range.map(|k| k * stride) {
-                    let (w, f) = (band.weight[i], values[i]);
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let g = gamma_at(i);
-                    for (a, v) in
-                        acc.iter_mut()
-                            .zip([w, w * g, w * g * g, w * f, w * f * g, w * f * f])
-                    {
-                        *a += v;
-                    }
-                }
-                acc
-            },
-            |total, part| total.iter_mut().zip(part).for_each(|(t, p)| *t += p),
-        )?;
-        let [n, sg, sgg, sf, sfg, sff] = sums;
-        let det = n * sgg - sg * sg;
-        if det.is_nan() || det <= 0.0 {
-            return None;
-        }
-        let a = (sgg * sf - sg * sfg) / det;
-        let c = (n * sfg - sg * sf) / det;
-        Some((sff - a * sf - c * sfg).max(0.0))
+        let levels = self.varying.as_ref().map(|v| &v.levels);
+        levels_ssr(levels, values.len(), stride, |i| {
+            let w = band.weight[i];
+            let u = self.displacement_at(i, lambda);
+            (w != 0.0).then(|| {
+                [
+                    w,
+                    values[i],
+                    gamma(i, band.r[i] - u),
+                    self.tilt_factor(i, u),
+                ]
+            })
+        })
     }
 
     /// The light's tilt factor `1 + tau r` at band pixel `i` displaced by
@@ -824,37 +802,140 @@ impl Correlation {
         self.varying.is_some()
     }
 
-    /// After convergence at `lambda`: whether the varying levels explain
-    /// the band better than a global pair by more than noise would (always
-    /// `true` for the global pair). Varying levels fitted to even light
-    /// only take up noise, and cost precision through their coupling with
-    /// the displacement; the fit then drops them.
+    /// After convergence at `lambda` with varying levels of elements
+    /// `length` pixels (or with the global pair, to try levels of that
+    /// length): the element length the band asks for, `None` for the
+    /// global pair. Varying levels fitted to even light only take up
+    /// noise, and cost precision through their coupling with the
+    /// displacement; levels whose elements are too long for the light
+    /// (an object whose edge runs in and out of a vignetted field: a
+    /// star's lobes) explain little more than the global pair, and leave
+    /// the rest to the displacement, which wiggles.
     ///
-    /// The test: the drop of the residual sum of squares from the global
-    /// pair to the varying levels, against its distribution under even
-    /// light, `sigma^2 chi^2` with `dim - 2` degrees of freedom (`sigma^2`
-    /// the pure-noise variance, [`Self::estimate_noise`]): significant
-    /// beyond its mean plus 5 standard deviations.
-    pub fn levels_significant(&mut self, lambda: &[f64], sampler: &Sampler) -> bool {
-        let Some((dim, ssr_global)) = self
-            .varying
-            .as_ref()
-            .map(|v| (v.levels.dim(), v.ssr_global))
-        else {
-            return true;
-        };
+    /// The levels are fitted by least squares at `lambda` with elements
+    /// of `length` and, when `shorter`, half and a quarter of it (down to
+    /// [`levels::MIN_LEVEL_ELEMENT`], and while the number of elements
+    /// grows): each is taken over the best before it (the global pair
+    /// first) when the drop of the residual sum of squares exceeds its
+    /// distribution under a model that fits, `sigma^2 chi^2` with as many
+    /// degrees of freedom as the extra unknowns, by 5 standard deviations;
+    /// `sigma^2` is the pure-noise variance ([`Self::estimate_noise`]) or
+    /// the residual variance the finer levels leave, whichever is larger
+    /// (an F-test where the profile misfits). The band pixels within
+    /// `CORNER_CLEARANCE` half-widths of a corner (a break of the
+    /// displacement's basis) are left out. When the noise or the sums
+    /// cannot be had: `Some(length)` for a system of varying levels, `None`
+    /// for the global pair (what it has).
+    pub fn levels_needed(
+        &mut self,
+        lambda: &[f64],
+        sampler: &Sampler,
+        length: f64,
+        shorter: bool,
+    ) -> Option<f64> {
+        let keep = self.varying.is_some().then_some(length);
         let Some(noise) = self
             .noise_var
             .or_else(|| self.estimate_noise(lambda, sampler))
         else {
-            return true;
+            return keep;
         };
         // The sums are weighted (about one per pixel).
         let sigma2 = noise * self.count / self.pixels;
-        let extra = (dim - 2) as f64;
-        let drop = ssr_global - self.ssr;
-        // NaN (no global fit recorded) keeps the levels.
-        drop.is_nan() || drop > sigma2 * (extra + 5.0 * (2.0 * extra).sqrt())
+        // Each pixel's weight, value, profile and tilt, read once for the
+        // four fits.
+        // Not near a corner: there the profile misfits (a wedge the edge's
+        // model only approximates) whatever the light, and shorter levels
+        // took that misfit up and the corners' fit apart.
+        let clear = CORNER_CLEARANCE * self.band.half_width();
+        let (total, closed) = (self.basis.length(), self.basis.is_closed());
+        let corners: Vec<f64> = self.basis.breaks().iter().map(|b| b.at).collect();
+        let near_corner = |s: f64| {
+            corners.iter().any(|&c| {
+                let d = (s - c).abs();
+                (if closed { d.min(total - d) } else { d }) < clear
+            })
+        };
+        // A regular subsample of a wide band: the test needs a few
+        // hundred pixels per level function, not every pixel.
+        let stride = self.band.len().div_ceil(LEVELS_TEST_PIXELS).max(1);
+        let pixels: Vec<Option<[f64; 4]>> = (0..self.band.len().div_ceil(stride))
+            .into_par_iter()
+            .map(|k| {
+                let i = k * stride;
+                if near_corner(self.band.s[i]) {
+                    return None;
+                }
+                self.levels_sample(i, lambda, sampler)
+            })
+            .collect();
+        let len = self.band.len();
+        // The subsample's weights (about one per pixel).
+        let counted: f64 = pixels.iter().flatten().map(|p| p[0]).sum();
+        let ssr =
+            |levels: Option<&LevelBasis>| levels_ssr(levels, len, stride, |i| pixels[i / stride]);
+        let Some(global) = ssr(None) else {
+            return keep;
+        };
+        let (mut best, mut best_ssr, mut best_dim) = (None, global, levels::FEATURES);
+        let tries = if shorter { 3 } else { 1 };
+        for len in [length, length / 2.0, length / 4.0].into_iter().take(tries) {
+            let model = LevelModel::Varying {
+                element_length: len,
+            };
+            if len < levels::MIN_LEVEL_ELEMENT {
+                break;
+            }
+            let Some(basis) = model.basis(total, closed) else {
+                continue;
+            };
+            let lb = LevelBasis::new(basis, &self.band.s);
+            if lb.dim() <= best_dim {
+                continue;
+            }
+            let Some(fitted) = ssr(Some(&lb)) else {
+                return keep;
+            };
+            let extra = (lb.dim() - best_dim) as f64;
+            // The larger of the noise and the residual variance left by
+            // these levels: a profile that misfits (a coarse stage's, or
+            // light tilted across the band before the pixel edge models
+            // it) leaves residuals that any finer model would take up,
+            // and their pattern along the curve follows the pixel grid,
+            // not the light.
+            let dof =
+                (counted - self.n_unknowns() as f64 / stride as f64 - lb.dim() as f64).max(1.0);
+            let variance = sigma2.max(fitted / dof);
+            if best_ssr - fitted > variance * (extra + 5.0 * (2.0 * extra).sqrt()) {
+                (best, best_ssr, best_dim) = (Some(len), fitted, lb.dim());
+            }
+        }
+        best
+    }
+
+    /// Band pixel `i`'s weight, value, profile and the virtual image's
+    /// factor there (the light's tilt, else 1) at `lambda`, for a fit of
+    /// the levels at this displacement; `None` for a pixel that does not
+    /// count (no weight, or displaced out of the image).
+    fn levels_sample(&self, i: usize, lambda: &[f64], sampler: &Sampler) -> Option<[f64; 4]> {
+        let band = &self.band;
+        let w = band.weight[i];
+        if w == 0.0 {
+            return None;
+        }
+        let u = self.displacement_at(i, lambda);
+        match &self.pushed {
+            Some(values) => {
+                let gamma = band.profile_at(i, u).0;
+                Some([w, values[i], gamma, self.tilt_factor(i, u)])
+            }
+            None => {
+                let [x, y] = band.pos[i];
+                let [nx, ny] = band.normal[i];
+                let f = sampler.value(x + u * nx, y + u * ny)?;
+                Some([w, f, band.gamma[i], 1.0])
+            }
+        }
     }
 
     /// The residual `g - f` of band pixel `i` at `lambda` with the gray
@@ -967,6 +1048,98 @@ impl Correlation {
         }
         (sigma2 * q / (c * c)).max(0.0).sqrt()
     }
+}
+
+/// Band pixels the levels' test reads at most (`levels_needed`; a
+/// regular subsample beyond).
+const LEVELS_TEST_PIXELS: usize = 12_000;
+
+/// Band pixels nearer a corner along the curve than this many band
+/// half-widths are left out of the levels' test (`levels_needed`).
+const CORNER_CLEARANCE: f64 = 2.0;
+
+/// The residual sum of squares of the gray levels fitted by least squares
+/// to band pixels `0, stride, 2 stride...` of a band of `len`: on the
+/// levels' basis `levels` (features `1` and `gamma`), or the global pair
+/// when `None`. `sample(i)` gives pixel `i`'s weight, value, profile and
+/// the factor of the virtual image there (the light's tilt, else 1), or
+/// `None` to leave it out. `None` when no pixel counts or the levels are
+/// not determined. Allocates the dense normal equations of `levels`: a
+/// few calls per stage, not per iteration.
+fn levels_ssr(
+    levels: Option<&LevelBasis>,
+    len: usize,
+    stride: usize,
+    sample: impl Fn(usize) -> Option<[f64; 4]> + Sync,
+) -> Option<f64> {
+    let stride = stride.max(1);
+    let count = len.div_ceil(stride);
+    if let Some(lb) = levels {
+        let dim = lb.dim();
+        let (blocks, mut rhs, sff) = chunked_sum(
+            count,
+            |range| {
+                let mut blocks = vec![0.0; lb.blocks_len()];
+                let mut rhs = vec![0.0; dim];
+                let mut sff = 0.0;
+                for i in range.map(|k| k * stride) {
+                    let Some([w, f, gamma, k]) = sample(i) else {
+                        continue;
+                    };
+                    let [f0, f1] = levels::features(gamma);
+                    lb.accumulate(i, w, [f0 * k, f1 * k], f, Some(&mut blocks), &mut rhs);
+                    sff += w * f * f;
+                }
+                (blocks, rhs, sff)
+            },
+            |total, part| {
+                total.0.iter_mut().zip(&part.0).for_each(|(t, p)| *t += p);
+                total.1.iter_mut().zip(&part.1).for_each(|(t, p)| *t += p);
+                total.2 += part.2;
+            },
+        )?;
+        let mut mat = vec![0.0; dim * dim];
+        lb.scatter(&blocks, &mut mat);
+        let b = rhs.clone();
+        DenseCholesky::factor(&mat, dim)
+            .ok()?
+            .solve_in_place(&mut rhs);
+        let fit: f64 = b.iter().zip(&rhs).map(|(u, v)| u * v).sum();
+        return Some((sff - fit).max(0.0));
+    }
+    let sums = chunked_sum(
+        count,
+        |range| {
+            let mut acc = [0.0; 6];
+            for i in range.map(|k| k * stride) {
+                let Some([w, f, g, k]) = sample(i) else {
+                    continue;
+                };
+                // The features `k` and `k g` (`k` is 1 without a tilt).
+                let (wk, gk) = (w * k, g * k);
+                for (a, v) in acc.iter_mut().zip([
+                    wk * k,
+                    wk * gk,
+                    w * gk * gk,
+                    wk * f,
+                    w * f * gk,
+                    w * f * f,
+                ]) {
+                    *a += v;
+                }
+            }
+            acc
+        },
+        |total, part| total.iter_mut().zip(part).for_each(|(t, p)| *t += p),
+    )?;
+    let [n, sg, sgg, sf, sfg, sff] = sums;
+    let det = n * sgg - sg * sg;
+    if det.is_nan() || det <= 0.0 {
+        return None;
+    }
+    let a = (sgg * sf - sg * sfg) / det;
+    let c = (n * sfg - sg * sf) / det;
+    Some((sff - a * sf - c * sfg).max(0.0))
 }
 
 #[cfg(test)]

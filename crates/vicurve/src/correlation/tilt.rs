@@ -1,5 +1,6 @@
-//! The light's tilt across the band, for the pushed profile with varying
-//! gray levels.
+//! The light's tilt across the band, for the pixel-edge profile (pushed):
+//! a factor of the virtual image with varying gray levels, taken out of
+//! the pixels' values with the global pair.
 //!
 //! Uneven light does not only change the levels along the curve: across
 //! it, each plateau slopes too. With the light `L` varying smoothly, the
@@ -18,15 +19,20 @@
 //! own values, not interpolated ones), with `r_in` past the band and
 //! four blur deviations and 2 px, so that the edge's tail does not pass
 //! for a slope; `tau = (beta_in + beta_out) / (alpha_in + alpha_out)`. These
-//! estimates are fitted by least squares with the levels' B-spline basis
-//! along `s`, and `tau` is held fixed during the iterations (the levels and
-//! the displacement are fitted with it). Light tilts both plateaus alike:
-//! the two sides' tilts, fitted apart, must agree within half the tilt
-//! (RMS), or there is no tilt (a plateau that is not flat for another
-//! reason, such as a level in the middle of a quantisation step that the
-//! edge's tail tips over, would otherwise pass for light). Where a plateau leaves the image
-//! the pixel gives no estimate; without enough of them (or with a `tau`
-//! beyond `MAX_TILT`) there is no tilt.
+//! estimates are fitted by least squares with a B-spline basis along `s`
+//! (the levels' default elements, whatever the levels' own), and `tau` is
+//! held fixed during the iterations (the levels and the displacement are
+//! fitted with it). The fitted tilt must exceed what the pixels' noise
+//! would put into it (their scatter about the fit, as a chi-square of as
+//! many degrees of freedom as functions), or there is no tilt: taken out,
+//! a tilt of noise would move the edge by as much as its error. Light
+//! tilts both plateaus alike: the two sides' tilts, fitted apart, must
+//! agree within half the tilt (RMS) or within what their noise explains,
+//! or there is no tilt (a plateau that is not flat for another reason,
+//! such as a level in the middle of a quantisation step that the edge's
+//! tail tips over, would otherwise pass for light). Where a plateau leaves
+//! the image the pixel gives no estimate; without enough of them (or with
+//! a `tau` beyond `MAX_TILT`) there is no tilt.
 
 use crate::band::Band;
 use crate::correlation::levels::LevelBasis;
@@ -37,8 +43,8 @@ use rayon::prelude::*;
 
 /// Band pixels within this of the curve (pixels) estimate the tilt: a
 /// strip `2 NEAR` px wide, about one pixel per two of the curve's length
-/// (each reads `2 PLATEAU_WIDTH / PLATEAU_STEP + 2` pixels), some 20 per
-/// function of the levels' basis (40 px elements).
+/// (each reads `2 PLATEAU_WIDTH / PLATEAU_STEP + 2` pixels), some 60 per
+/// function of the basis (128 px elements).
 const NEAR: f64 = 0.25;
 /// Width of each plateau sampled, pixels.
 const PLATEAU_WIDTH: f64 = 4.0;
@@ -54,6 +60,9 @@ const TAIL_MARGIN: f64 = 2.0;
 const CONSISTENCY: f64 = 0.5;
 /// A relative slope beyond this (1/px, 5 % per pixel) is not light.
 const MAX_TILT: f64 = 0.05;
+/// Standard deviations of the noise's chi-square beyond its mean that a
+/// tilt, and the two sides' difference, must exceed to count as such.
+const NOISE_SDS: f64 = 5.0;
 
 /// A tilt as [`estimate`] measured it, kept for the next references of a
 /// stage: the light does not change when the reference moves a fraction of
@@ -133,7 +142,7 @@ fn coefficients(
                         mat[jk * m + levels.basis.index(first, l)] += vk * vl;
                     }
                 }
-                used.push(i);
+                used.push((i, taus));
             }
             (mat, rhs, used)
         },
@@ -153,19 +162,33 @@ fn coefficients(
     let factor = DenseCholesky::factor(&mat, m).ok()?;
     rhs.iter_mut().for_each(|r| factor.solve_in_place(r));
     let at = |coefs: &[f64], i: usize| levels.value(i, coefs);
-    // Light tilts both sides alike (relatively): a difference as large as
-    // half the tilt is something else (a plateau that is not flat, a level
-    // at a quantisation step's middle), and then there is no tilt.
-    let (mut diff, mut both) = (0.0, 0.0);
-    for &i in &used {
+    // The fitted tilt and the two sides' difference over the pixels, and
+    // what the pixels' own estimates leave about them (their noise).
+    let (mut diff, mut both, mut noise_diff, mut noise_both) = (0.0, 0.0, 0.0, 0.0);
+    for &(i, [raw, raw_out, raw_in]) in &used {
         let (t, t_out, t_in) = (at(&rhs[0], i), at(&rhs[1], i), at(&rhs[2], i));
         diff += (t_out - t_in).powi(2);
         both += t * t;
+        noise_diff += (raw_out - raw_in - (t_out - t_in)).powi(2);
+        noise_both += (raw - t).powi(2);
     }
+    // What noise alone puts into a fitted function's sum of squares over
+    // the pixels: the variance of one pixel's estimate times a chi-square
+    // of `m` degrees of freedom, here its mean and 5 standard deviations.
+    let (n, mf) = (used.len() as f64, m as f64);
+    let by_noise = |residual: f64| residual / (n - mf) * (mf + NOISE_SDS * (2.0 * mf).sqrt());
+    // A tilt the noise could have made is none: taken out, it would move
+    // the edge by as much as its error.
+    let significant = both > by_noise(noise_both);
+    // Light tilts both sides alike (relatively): a difference as large as
+    // half the tilt, and beyond what the noise explains (the dark side's
+    // relative tilt is the noisier), is something else (a plateau that is
+    // not flat, a level at a quantisation step's middle), and then there
+    // is no tilt.
+    let consistent = diff <= CONSISTENCY * CONSISTENCY * both || diff <= by_noise(noise_diff);
     // (NaN sums give no tilt.)
-    let consistent = diff <= CONSISTENCY * CONSISTENCY * both;
     let [coefs, _, _] = rhs;
-    consistent.then_some(coefs)
+    (significant && consistent).then_some(coefs)
 }
 
 /// The three relative tilts `[both sides, outer side, inner side]`

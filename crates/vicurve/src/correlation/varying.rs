@@ -59,9 +59,6 @@ pub(crate) struct Varying {
     mat_factor: DenseCholesky,
     /// `sum w dg^2 N_i` (the row sums of `M0`).
     dden: Vec<f64>,
-    /// Residual sum of squares of the best global pair at the last
-    /// iteration's displacement.
-    pub ssr_global: f64,
     /// Per band pixel: `f`, `gamma` and its derivative `dg` of the
     /// current iteration.
     fbuf: Vec<f64>,
@@ -136,7 +133,6 @@ impl Varying {
             levels,
             theta: vec![0.0; dim],
             have_theta: false,
-            ssr_global: f64::NAN,
             b,
             y,
             mat_factor: s_factor.clone(),
@@ -483,7 +479,6 @@ impl Varying {
         if !(a_global.is_finite() && c_global.is_finite()) {
             return Err(StepFailure::NonFinite);
         }
-        self.ssr_global = (sff - a_global * sf - c_global * sfg).max(0.0);
         let sign = polarity_sign(polarity);
         if sign * c_global < 0.0 || (sign != 0.0 && c_global == 0.0) {
             // As with the global pair: the forced polarity disagrees with

@@ -17,8 +17,8 @@ use super::reference::{check_open_start, next_reference, Ends, CURVE_SPACING};
 use super::run::largest_change;
 use super::track::{self, TrackCache, TrackState};
 use super::{
-    breaks, capped_stages, default_stages, Divergence, Elements, FitConfig, Measurement, Outcome,
-    Sample, Stage, StageReport, Trim, TrimReason, TrimmedEnd,
+    breaks, capped_stages, default_stages, Divergence, Elements, FitConfig, LevelModel,
+    Measurement, Outcome, Sample, Stage, StageReport, Trim, TrimReason, TrimmedEnd,
 };
 use crate::curve::SplineCurve;
 use crate::error::{Error, Result};
@@ -101,9 +101,13 @@ pub(super) enum Flow {
 pub(super) struct Schedule<'s> {
     /// The image.
     pub sampler: &'s Sampler,
-    /// The configuration; its level model may be downgraded to the global
-    /// pair on the way (see `Correlation::levels_significant`).
+    /// The configuration; its level model may become the global pair, or
+    /// varying levels of shorter elements, on the way (see
+    /// `Correlation::levels_needed`).
     pub config: FitConfig,
+    /// The level model the configuration asked for, before the stages'
+    /// tests changed it.
+    pub levels_asked: LevelModel,
     /// What a tracked frame takes from the previous one.
     pub tracked: Option<TrackState>,
     /// Whether the schedule is the default (or tracking) one: stages may be
@@ -236,6 +240,7 @@ impl<'s> Schedule<'s> {
             coarse: false,
             binned: Vec::new(),
             binned_done: false,
+            levels_asked: config.levels,
             config,
         })
     }

@@ -865,20 +865,25 @@ impl Schedule<'_> {
     ) -> Result<Checked> {
         let r = st.stage.half_width;
         // Varying levels that explain no more than noise would are dropped
-        // (they cost precision): this stage runs once more with the global
-        // pair, and so do the next.
+        // (they cost precision), and elements too long for the light are
+        // shortened (`Correlation::levels_needed`): this stage runs once
+        // more with the levels chosen, and so do the next.
         let test_levels = o == Outcome::Converged && !st.levels_tested;
         st.levels_tested |= test_levels;
         // The levels' test estimates the noise on this fit when no stage
         // noise was carried into it: the refinement below reuses it.
         let mut noise_estimated = false;
-        if test_levels && corr.varying_levels() {
+        if let Some((now, shorter)) = self.levels_test(test_levels, &corr, profile) {
             let carried = corr.noise_var().is_some();
-            if corr.levels_significant(&lambda, self.sampler) {
+            let needed = corr.levels_needed(&lambda, self.sampler, now, shorter);
+            let model = needed.map_or(LevelModel::Global, |len| LevelModel::Varying {
+                element_length: len,
+            });
+            if model == self.config.levels {
                 noise_estimated = !carried && corr.noise_var().is_some();
             } else {
-                self.config.levels = LevelModel::Global;
-                self.refit_global(st, (&mut corr, &mut lambda), basis, tolerance);
+                self.config.levels = model;
+                self.refit_levels(st, (&mut corr, &mut lambda), basis, tolerance);
             }
         }
         let auto_elements = matches!(st.stage.elements, Elements::Auto { .. });
@@ -980,9 +985,36 @@ impl Schedule<'_> {
         Ok(Next::Exit(Flow::Completed))
     }
 
-    /// The run again with the global pair of levels (already set in the
-    /// configuration), from where it converged; kept when it converges.
-    fn refit_global(
+    /// Whether a converged stage tests its gray levels, and how
+    /// (`Correlation::levels_needed`): the element length of the varying
+    /// levels it fits (or, with the global pair, of those asked for), and
+    /// whether elements shorter than that are tried. Varying levels are
+    /// tested once per stage; shorter elements only on the pixel edge,
+    /// whose profile fits: on a coarse stage's, the misfit near a
+    /// polygon's corners passed for light that changes along the curve,
+    /// and shorter levels there took the corners' fit apart (the test
+    /// leaves the pixels near corners out). The pixel edge also tests the
+    /// global pair that an earlier stage chose, when varying levels were
+    /// asked for: the default elements may have been too long for the
+    /// light.
+    fn levels_test(&self, test: bool, corr: &Correlation, profile: Profile) -> Option<(f64, bool)> {
+        let pixel_edge = matches!(profile, Profile::PixelEdge { .. });
+        match (self.config.levels, self.levels_asked) {
+            _ if !test => None,
+            (LevelModel::Varying { element_length }, _) if corr.varying_levels() => {
+                Some((element_length, pixel_edge))
+            }
+            (LevelModel::Global, LevelModel::Varying { element_length }) if pixel_edge => {
+                Some((element_length, true))
+            }
+            _ => None,
+        }
+    }
+
+    /// The run again with the levels the stage's test chose (already set
+    /// in the configuration: the global pair, or varying levels of shorter
+    /// elements), from where it converged; kept when it converges.
+    fn refit_levels(
         &mut self,
         st: &mut StageState,
         (corr, lambda): (&mut Correlation, &mut Vec<f64>),
@@ -990,13 +1022,13 @@ impl Schedule<'_> {
         tolerance: f64,
     ) {
         let band = corr.band().clone();
-        let Ok(mut global) =
+        let Ok(mut refit) =
             Correlation::prepare(band, basis.clone(), self.sampler, self.config.levels, None)
         else {
             return;
         };
-        let mut global_lambda = lambda.clone();
-        let mut global_step = None;
+        let mut refit_lambda = lambda.clone();
+        let mut refit_step = None;
         let limits = RunLimits {
             budget: self.config.max_iterations,
             tolerance,
@@ -1005,20 +1037,20 @@ impl Schedule<'_> {
             lost: f64::INFINITY,
         };
         let (end, used) = iterate_to_end(
-            &mut global,
-            &mut global_lambda,
+            &mut refit,
+            &mut refit_lambda,
             self.sampler,
             &self.config,
             limits,
-            &mut global_step,
+            &mut refit_step,
             RunLog {
                 history: &mut st.history,
-                kind: RunKind::GlobalLevels,
+                kind: RunKind::Levels,
             },
         );
         st.iterations += used;
-        if let (Run::Converged, Some(_)) = (end, global_step) {
-            (*corr, *lambda, st.step) = (global, global_lambda, global_step);
+        if let (Run::Converged, Some(_)) = (end, refit_step) {
+            (*corr, *lambda, st.step) = (refit, refit_lambda, refit_step);
         }
     }
 

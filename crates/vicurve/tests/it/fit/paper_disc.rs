@@ -60,7 +60,7 @@ fn short_elements_on_the_paper_disc_are_limited_by_8_bit_quantisation() {
                 // centre, where the rounding repeats in the eight octants
                 // and 40 elements already follow part of it.
                 assert!((1.1..2.2).contains(&(s126 / s40)), "{s40} {s126}");
-                assert!(s126 > 1.2e-3, "{s126}");
+                assert!(s126 > 1e-3, "{s126}");
                 fine.push(s126);
             } else {
                 // No quantisation noise: the elements' own limit is far
