@@ -842,8 +842,6 @@ impl Correlation {
         };
         // The sums are weighted (about one per pixel).
         let sigma2 = noise * self.count / self.pixels;
-        // Each pixel's weight, value, profile and tilt, read once for the
-        // four fits.
         // Not near a corner: there the profile misfits (a wedge the edge's
         // model only approximates) whatever the light, and shorter levels
         // took that misfit up and the corners' fit apart.
@@ -856,8 +854,9 @@ impl Correlation {
                 (if closed { d.min(total - d) } else { d }) < clear
             })
         };
-        // A regular subsample of a wide band: the test needs a few
-        // hundred pixels per level function, not every pixel.
+        // Each pixel's weight, value, profile and tilt, read once for the
+        // four fits; a regular subsample of a wide band (the test needs a
+        // few hundred pixels per level function, not every pixel).
         let stride = self.band.len().div_ceil(LEVELS_TEST_PIXELS).max(1);
         let pixels: Vec<Option<[f64; 4]>> = (0..self.band.len().div_ceil(stride))
             .into_par_iter()
