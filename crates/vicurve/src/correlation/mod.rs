@@ -568,9 +568,9 @@ impl Correlation {
             return Ok(corr);
         };
         // The light's tilt across the band too, on the levels' default
-        // elements whatever the levels' own: measured on shorter ones
-        // (a vignetted star's 32 px), it was noisier and the star's
-        // scatter larger (1.5e-2 against 1.1e-2 px at 5 % falloff).
+        // elements whatever the levels' own: shorter ones leave fewer
+        // plateau pixels to each function, and the tilt's noise moves the
+        // edge (docs/benchmarks.md, "Vignetting").
         let Some(lb) = LevelModel::default()
             .basis(corr.basis.length(), corr.basis.is_closed())
             .map(|b| LevelBasis::new(b, &corr.band.s))
@@ -879,12 +879,12 @@ impl Correlation {
         let (mut best, mut best_ssr, mut best_dim) = (None, global, levels::FEATURES);
         let tries = if shorter { 3 } else { 1 };
         for len in [length, length / 2.0, length / 4.0].into_iter().take(tries) {
-            let model = LevelModel::Varying {
-                element_length: len,
-            };
             if len < levels::MIN_LEVEL_ELEMENT {
                 break;
             }
+            let model = LevelModel::Varying {
+                element_length: len,
+            };
             let Some(basis) = model.basis(total, closed) else {
                 continue;
             };

@@ -873,7 +873,10 @@ impl Schedule<'_> {
         // The levels' test estimates the noise on this fit when no stage
         // noise was carried into it: the refinement below reuses it.
         let mut noise_estimated = false;
-        if let Some((now, shorter)) = self.levels_test(test_levels, &corr, profile) {
+        let plan = test_levels
+            .then(|| self.levels_test(&corr, profile))
+            .flatten();
+        if let Some((now, shorter)) = plan {
             let carried = corr.noise_var().is_some();
             let needed = corr.levels_needed(&lambda, self.sampler, now, shorter);
             let model = needed.map_or(LevelModel::Global, |len| LevelModel::Varying {
@@ -985,10 +988,10 @@ impl Schedule<'_> {
         Ok(Next::Exit(Flow::Completed))
     }
 
-    /// Whether a converged stage tests its gray levels, and how
-    /// (`Correlation::levels_needed`): the element length of the varying
-    /// levels it fits (or, with the global pair, of those asked for), and
-    /// whether elements shorter than that are tried. Varying levels are
+    /// Whether a converged stage, not yet tested, tests its gray levels,
+    /// and how (`Correlation::levels_needed`): the element length of the
+    /// varying levels it fits (or, with the global pair, of those asked
+    /// for), and whether elements shorter than that are tried. Varying levels are
     /// tested once per stage; shorter elements only on the pixel edge,
     /// whose profile fits: on a coarse stage's, the misfit near a
     /// polygon's corners passed for light that changes along the curve,
@@ -997,10 +1000,9 @@ impl Schedule<'_> {
     /// global pair that an earlier stage chose, when varying levels were
     /// asked for: the default elements may have been too long for the
     /// light.
-    fn levels_test(&self, test: bool, corr: &Correlation, profile: Profile) -> Option<(f64, bool)> {
+    fn levels_test(&self, corr: &Correlation, profile: Profile) -> Option<(f64, bool)> {
         let pixel_edge = matches!(profile, Profile::PixelEdge { .. });
         match (self.config.levels, self.levels_asked) {
-            _ if !test => None,
             (LevelModel::Varying { element_length }, _) if corr.varying_levels() => {
                 Some((element_length, pixel_edge))
             }
