@@ -133,7 +133,12 @@ fn even_light_same_result_as_global_pair() {
 /// `falloff` (relative) at its radius, quadratically, as a vignetting lens
 /// centred on a round part does: even along the curve, tilted across it.
 fn vignetted_disc(blur: f64, falloff: f64, noise: f64, seed: u64) -> Image {
-    let image = lit_disc(blur, 0.0, noise, seed);
+    vignetted(&lit_disc(blur, 0.0, noise, seed), falloff)
+}
+
+/// `image` (320 x 320) under light that falls off by `falloff` at `R`
+/// from `(CX, CY)`, quadratically, quantised to 8 bits.
+fn vignetted(image: &Image, falloff: f64) -> Image {
     Image::from_fn(320, 320, |x, y| {
         let rho2 = ((x as f64 - CX).powi(2) + (y as f64 - CY).powi(2)) / (R * R);
         (image.get(x, y) * (1.0 - falloff * rho2) * 255.0).round() / 255.0
@@ -204,11 +209,7 @@ fn star_in_a_vignetted_field_gets_shorter_level_elements() {
         bits: None,
         ..RenderSpec::default()
     };
-    let even = render(&spec).unwrap();
-    let image = Image::from_fn(320, 320, |x, y| {
-        let rho2 = ((x as f64 - CX).powi(2) + (y as f64 - CY).powi(2)) / (R * R);
-        (even.get(x, y) * (1.0 - 0.1 * rho2) * 255.0).round() / 255.0
-    });
+    let image = vignetted(&render(&spec).unwrap(), 0.1);
     let init = InitialCurve::Circle {
         cx: CX + 1.0,
         cy: CY - 1.0,
