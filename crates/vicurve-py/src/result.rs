@@ -146,8 +146,8 @@ impl PyMeasurement {
     }
 
     /// Why a diverged fit stopped: "left_image", "no_contrast",
-    /// "non_finite", "degenerate", "self_intersecting", "folded_back" or
-    /// "lost_edge"; None otherwise.
+    /// "non_finite", "degenerate", "self_intersecting", "folded_back",
+    /// "lost_edge" or "off_edge"; None otherwise.
     #[getter]
     fn divergence(&self) -> Option<&'static str> {
         match self.measurement.outcome {
@@ -159,6 +159,7 @@ impl PyMeasurement {
                 Divergence::SelfIntersecting { .. } => "self_intersecting",
                 Divergence::FoldedBack { .. } => "folded_back",
                 Divergence::LostEdge { .. } => "lost_edge",
+                Divergence::OffEdge { .. } => "off_edge",
             }),
             _ => None,
         }

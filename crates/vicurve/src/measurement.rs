@@ -54,6 +54,20 @@ pub enum Divergence {
         /// y (row), pixels.
         y: f64,
     },
+    /// The curve does not follow the edge: the stretches where the image
+    /// puts the edge more than a pixel off it (the level crossing, at
+    /// samples flagged as misfits) add up to an element or more, between
+    /// stretches where it crosses the edge. Elements too long for the
+    /// shape do that: a cubic cannot follow a bay whose radius of
+    /// curvature is shorter than its elements.
+    OffEdge {
+        /// x (column) of the sample farthest off, pixels.
+        x: f64,
+        /// y (row) of that sample, pixels.
+        y: f64,
+        /// How far the edge lies from it, pixels.
+        offset: f64,
+    },
 }
 
 impl std::fmt::Display for Divergence {
@@ -82,6 +96,12 @@ impl std::fmt::Display for Divergence {
                 write!(
                     f,
                     "the curve left the edge near ({x:.1}, {y:.1}): no edge within the band there"
+                )
+            }
+            Divergence::OffEdge { x, y, offset } => {
+                write!(
+                    f,
+                    "the curve does not follow the edge: it lies {offset:.1} px off it near ({x:.1}, {y:.1}), and over a pixel off along an element or more of its length (elements too long for the shape: give more, or let the default schedule choose them)"
                 )
             }
         }

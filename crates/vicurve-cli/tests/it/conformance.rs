@@ -58,9 +58,12 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     // 1.02). The other eight far stars of the paper's schedule moved the
     // other way (scatter 0.052 -> 0.033, 0.154 -> 0.108, 0.128 -> 0.097
     // px, ...; docs/benchmarks.md, "Coarse stages on 8 x 8 blocks").
+    // Since a curve more than a pixel off the edge along an element or
+    // more in all is diverged (`fit/output.rs`, `off_edge`), it fails as
+    // diverged too: its bays lie up to 1.4 px off.
     (
         "far-star-l5-a0.30/blur1.5/noise1/8bit/bright/circle-0.85r/paper-stages",
-        "covers 96.9 %",
+        "diverged: the curve does not follow the edge: it lies 1.4 px off it near (668.9, 1515.2), and over a pixel off along an element or more of its length (elements too long for the shape: give more, or let the default schedule choose them); covers 96.9 %",
     ),
     // Encoded images (`tone.rs`): measured as linear, these edges were
     // 0.25 and 0.5 px off with a sigma of 3e-3 (a silent failure). The tone

@@ -136,7 +136,18 @@ class Result:
     @property
     def divergence(
         self,
-    ) -> Optional[Literal["left_image", "no_contrast", "non_finite", "degenerate"]]: ...
+    ) -> Optional[
+        Literal[
+            "left_image",
+            "no_contrast",
+            "non_finite",
+            "degenerate",
+            "self_intersecting",
+            "folded_back",
+            "lost_edge",
+            "off_edge",
+        ]
+    ]: ...
     @property
     def message(self) -> str:
         """The outcome in words."""

@@ -13,6 +13,7 @@ use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::interp::Sampler;
+use crate::measurement::Divergence;
 use crate::virtual_image::corner::REACH;
 use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::{Kind, Profile};
@@ -59,9 +60,11 @@ pub(super) struct Output {
     pub samples: Vec<Sample>,
     /// The gray levels along the curve, when they vary.
     pub levels: Vec<LevelSample>,
-    /// Where the curve left the edge: the middle of the longest stretch of
-    /// samples whose band holds no edge, when it spans an element or more.
-    pub lost_edge: Option<[f64; 2]>,
+    /// Where the curve left the edge ([`Divergence::LostEdge`], the middle
+    /// of the longest stretch of samples whose band holds no edge, when it
+    /// spans an element or more), or does not follow it
+    /// ([`Divergence::OffEdge`], see [`off_edge`]).
+    pub lost_edge: Option<Divergence>,
 }
 
 impl Final {
@@ -127,14 +130,14 @@ impl Final {
             self.profile,
         )
         .map(|r| r.along(&curve, &at));
-        let (samples, lost): (Vec<Sample>, Vec<bool>) = kept
+        let (samples, seen): (Vec<Sample>, Vec<(bool, f64)>) = kept
             .par_iter()
             .enumerate()
             .map(|(k, &i)| {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
                 let (sigma_noise, misfit) = terms.at(i, params[i]);
-                let (misfit, lost) = terms.edge_checked(params[i], sigma_noise, misfit);
+                let (misfit, seen) = terms.edge_checked(params[i], sigma_noise, misfit);
                 // The shape error the elements leave where the edge bends
                 // faster than they follow, here (`representation.rs`).
                 let shape = shapes.as_ref().map_or(0.0, |r| r[k]);
@@ -153,10 +156,15 @@ impl Final {
                     misfit: misfit.max(shape) > sigma_noise,
                     weight: weights.at(params[i]),
                 };
-                (sample, lost)
+                (sample, seen)
             })
             .unzip();
-        let lost_edge = lost_stretch(&samples, &lost, closed, self.corr.basis().element_length());
+        let span = self.corr.basis().element_length();
+        let lost: Vec<bool> = seen.iter().map(|&(lost, _)| lost).collect();
+        let offsets: Vec<f64> = seen.iter().map(|&(_, offset)| offset).collect();
+        let lost_edge = lost_stretch(&samples, &lost, closed, span)
+            .map(|[x, y]| Divergence::LostEdge { x, y })
+            .or_else(|| off_edge(&samples, &offsets, span));
         Ok(Output {
             curve,
             fit_error,
@@ -369,22 +377,23 @@ impl<'a> SigmaTerms<'a> {
     /// terms `noise` and `misfit` of [`Self::at`]: where it is flagged
     /// (`misfit > noise`), at least the image's edge's distance from it
     /// ([`EdgeCheck`]), which a linearised request underestimates when it
-    /// is large, or the band's half-width where the band holds no edge;
-    /// and whether the band holds none (the curve left the edge there),
-    /// flagged or not: where the band sees only a plateau the residuals
-    /// are the noise's, and nothing is flagged.
-    fn edge_checked(&self, u: f64, noise: f64, misfit: f64) -> (f64, bool) {
+    /// is large, or the band's half-width where the band holds no edge.
+    /// With it: whether the band holds none (the curve left the edge
+    /// there), flagged or not: where the band sees only a plateau the
+    /// residuals are the noise's, and nothing is flagged; and the edge's
+    /// distance at a flagged sample (0 elsewhere), pixels.
+    fn edge_checked(&self, u: f64, noise: f64, misfit: f64) -> (f64, (bool, f64)) {
         let Some(edge) = &self.edge else {
-            return (misfit, false);
+            return (misfit, (false, 0.0));
         };
         let fin = self.fin;
         let offset = edge.at(u, displacement(fin.corr.basis(), &fin.lambda, u));
         let flagged = misfit > noise;
         match offset {
-            Some(offset) if flagged => (misfit.max(offset), false),
-            Some(_) => (misfit, false),
-            None if flagged => (misfit.max(fin.half_width), true),
-            None => (misfit, true),
+            Some(offset) if flagged => (misfit.max(offset), (false, offset)),
+            Some(_) => (misfit, (false, 0.0)),
+            None if flagged => (misfit.max(fin.half_width), (true, 0.0)),
+            None => (misfit, (true, 0.0)),
         }
     }
 }
@@ -459,6 +468,37 @@ fn lost_stretch(samples: &[Sample], lost: &[bool], closed: bool, span: f64) -> O
     let (arc, first, last) = best?;
     let mid = &samples[(start + (first + last) / 2) % n];
     (arc >= span).then_some([mid.x, mid.y])
+}
+
+/// A sample counts as off the edge ([`off_edge`]) when the image puts the
+/// edge more than this far from it, pixels: a pixel off is no measurement
+/// for a tool whose results are read to the thousandth (docs/benchmarks.md,
+/// "Off the edge between crossings", for what the conformance sweep's
+/// results hold).
+const OFF_EDGE: f64 = 1.0;
+
+/// Where a curve does not follow the edge: when `samples` whose `offsets`
+/// (the edge's distance from each, pixels; 0 where it is within the
+/// noise) exceed [`OFF_EDGE`] add up to `span` pixels of arc (an element)
+/// or more, [`Divergence::OffEdge`] at the one farthest off. Added up,
+/// not in one stretch: elements too long for a star's bays leave each
+/// bay in stretches shorter than an element, between which the curve
+/// crosses the edge (the level crossing sees the edge there, so
+/// [`lost_stretch`] does not). A sample's arc is half the way to each
+/// neighbour (the first and last samples', half the way to their one).
+fn off_edge(samples: &[Sample], offsets: &[f64], span: f64) -> Option<Divergence> {
+    let n = samples.len();
+    let arc = |i: usize| 0.5 * (samples[(i + 1).min(n - 1)].s - samples[i.saturating_sub(1)].s);
+    let off: f64 = (0..n).filter(|&i| offsets[i] > OFF_EDGE).map(arc).sum();
+    if off < span {
+        return None;
+    }
+    let far = (0..n).max_by(|&a, &b| offsets[a].total_cmp(&offsets[b]))?;
+    Some(Divergence::OffEdge {
+        x: samples[far].x,
+        y: samples[far].y,
+        offset: offsets[far],
+    })
 }
 
 /// The indices of the output samples among points at arc lengths `s`

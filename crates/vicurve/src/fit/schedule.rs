@@ -556,18 +556,20 @@ impl<'s> Schedule<'s> {
     }
 
     /// A converged result that left the edge along a stretch of an element
-    /// or more (`lost`, where; see `output::lost_stretch`) is diverged: the
-    /// band holds no edge there, so neither the curve nor its `sigma` says
-    /// where the edge is. Only a converged one: the check reads the half
+    /// or more (`lost`: [`Divergence::LostEdge`], see
+    /// `output::lost_stretch`), or lies over a pixel off it along an
+    /// element or more in all (`lost`: [`Divergence::OffEdge`], see
+    /// `output::off_edge`), is diverged: neither the curve nor its `sigma`
+    /// says where the edge is there. Only a converged one: the check reads the half
     /// level of the fitted gray levels, which a fit stopped early (a single
     /// iteration from 10 px off) may not have yet; an iteration limit has
     /// [`Self::check_plateau`].
-    fn check_edge(&mut self, lost: Option<[f64; 2]>) {
+    fn check_edge(&mut self, lost: Option<Divergence>) {
         if self.outcome != Outcome::Converged {
             return;
         }
-        if let Some([x, y]) = lost {
-            self.diverge_result(Divergence::LostEdge { x, y });
+        if let Some(divergence) = lost {
+            self.diverge_result(divergence);
         }
     }
 

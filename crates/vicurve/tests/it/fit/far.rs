@@ -158,6 +158,68 @@ fn a_curve_off_the_edge_is_diverged() {
     assert_lost_edge("a curve off the edge", &m, &spec);
 }
 
+/// The paper's stages with its element counts (R = 20, 10, 5 px on 25,
+/// 50, 100 elements) on a 6-lobed star of amplitude 30 %: its bays bend
+/// on a radius of 15 px, its last elements are 24 px long, and a cubic
+/// that long cannot follow a bay (the conformance sweep's 1704x2272 star
+/// at that ratio: curve up to 5.3 px off in every bay, 58 % of its samples
+/// flagged, reported converged). The curve crosses the edge between the
+/// bays, so its band sees the edge everywhere and no stretch is lost; the
+/// bays' stretches more than a pixel off add up to more than an element:
+/// diverged, not following the edge, where it lies farthest off. The
+/// default schedule measures the same image.
+#[test]
+fn elements_too_long_for_the_bays_do_not_follow_the_edge() {
+    let (cx, cy, r0) = (450.3, 449.8, 300.0);
+    let shape = Shape::Star {
+        cx,
+        cy,
+        r0,
+        amplitude: 0.3,
+        lobes: 6,
+        phase: 0.0,
+    };
+    let spec = spec(shape, (900, 900), 1.5, 0.01, 3, Some(8));
+    let image = render(&spec).expect("render");
+    let init = InitialCurve::Circle {
+        cx,
+        cy,
+        r: 0.85 * r0,
+    };
+    let paper = FitConfig {
+        stages: stages(&[
+            (20.0, Elements::Count(25)),
+            (10.0, Elements::Count(50)),
+            (5.0, Elements::Count(100)),
+        ]),
+        ..FitConfig::default()
+    };
+    let m = measure(&image, &init, &paper).expect("measure");
+    let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
+    println!(
+        "paper's counts: {} (max error {:.2} px)",
+        m.outcome, s.max_abs
+    );
+    assert!(s.max_abs > 1.5, "the elements should not follow the bays");
+    let Outcome::Diverged {
+        divergence: Divergence::OffEdge { x, y, offset },
+    } = m.outcome
+    else {
+        panic!("{}", m.outcome);
+    };
+    assert!(offset > 1.0, "{offset}");
+    assert!(spec.shape.signed_distance(x, y).abs() > 1.0);
+
+    let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+    let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
+    println!(
+        "default: {}, scatter {:.2e} max {:.2e} px",
+        m.outcome, s.scatter, s.max_abs
+    );
+    assert_eq!(m.outcome, Outcome::Converged);
+    assert!(s.max_abs <= 8.0 * s.scatter, "{} {}", s.max_abs, s.scatter);
+}
+
 /// `m` is more than 5 px off `spec`'s shape somewhere (the elements do
 /// not follow the lobes) and diverged with a lost edge, at a point more
 /// than the last band's 5 px off the shape.
