@@ -23,14 +23,36 @@
 //! curve (renormalised); a closed curve's wraps around; a curve with
 //! corners is averaged across them like any other stretch; without blur
 //! there is no table and the profile takes the local curvature.
+//!
+//! # The osculating circle's weight
+//! Where the blur is not small against the radius of curvature, the
+//! profile adds the rest of the blurred osculating circle
+//! (`virtual_image/osculating.rs`), which describes the edge where its
+//! curvature holds over the blur: on a small disc, not on a rounded corner
+//! or in a star's bay, where the curvature changes within the blur's reach
+//! and the osculating circle's higher terms are no better than the
+//! expansion's (docs/benchmarks.md, "The blurred osculating circle"). The
+//! table also holds, per sample,
+//! the weight of those terms: 1 where the local curvature stays within
+//! [`STEADY`] of its own value over [`STEADY_REACH`] spreads each way
+//! along the curve (the averaged curvature, both), 0 where it departs by [`UNSTEADY`] (a smooth step
+//! between), and 0 wherever they add nothing.
 
 use crate::curve::SplineCurve;
+use crate::virtual_image::osculating;
 use crate::virtual_image::pixel_edge::spread_variance;
 
 /// Spacing of the table's samples along the parameter, pixels.
 const STEP: f64 = 0.25;
 /// The kernel reaches this many of its standard deviations.
 const REACH: f64 = 4.0;
+/// The osculating circle counts in full where the curvature varies by at
+/// most this fraction of itself over the blur's reach ...
+const STEADY: f64 = 0.1;
+/// ... and not at all from this fraction on.
+const UNSTEADY: f64 = 0.3;
+/// The blur's reach along the curve, in spreads each way.
+const STEADY_REACH: f64 = 2.0;
 
 /// The reference's curvature averaged over the blur, sampled along its
 /// parameter (see the [module docs](self)).
@@ -38,6 +60,9 @@ pub(super) struct BlurredCurvature {
     closed: bool,
     step: f64,
     values: Vec<f64>,
+    /// The osculating circle's weight per sample (module docs); empty
+    /// where it is 0 everywhere.
+    osculating: Vec<f64>,
 }
 
 impl BlurredCurvature {
@@ -64,7 +89,7 @@ impl BlurredCurvature {
                 (-0.5 * t * t).exp()
             })
             .collect();
-        let values = (0..count as isize)
+        let values: Vec<f64> = (0..count as isize)
             .map(|i| {
                 let (mut sum, mut weight) = (0.0, 0.0);
                 for (j, w) in (-half..=half).zip(&kernel) {
@@ -82,11 +107,40 @@ impl BlurredCurvature {
                 sum / weight
             })
             .collect();
+        let osculating = steadiness(&values, (v, step), closed);
         Some(BlurredCurvature {
             closed,
             step,
             values,
+            osculating,
         })
+    }
+
+    /// The osculating circle's weight at parameter `u` (0 to 1; that of
+    /// the nearest sample).
+    pub(super) fn osculating_at(&self, u: f64) -> f64 {
+        if self.osculating.is_empty() {
+            return 0.0;
+        }
+        let n = self.osculating.len() as isize;
+        let k = (u / self.step).round() as isize;
+        let k = if self.closed {
+            k.rem_euclid(n)
+        } else {
+            k.clamp(0, n - 1)
+        };
+        self.osculating[k as usize]
+    }
+
+    /// Whether the osculating circle counts (in full, by at least half
+    /// its weight) somewhere along the curve under a spread of variance
+    /// `v` (px^2): where it barely starts it changes the profile's answer
+    /// to the curvature by little.
+    pub(super) fn has_osculating(&self, v: f64) -> bool {
+        self.osculating
+            .iter()
+            .zip(&self.values)
+            .any(|(&w, &k)| w >= 0.5 && osculating::in_full(v, k))
     }
 
     /// The averaged curvature at parameter `u`, 1/px (linear between the
@@ -106,6 +160,48 @@ impl BlurredCurvature {
         };
         (1.0 - t) * get(i) + t * get(i + 1)
     }
+}
+
+/// The osculating circle's weights (module docs) of the samples of
+/// `blurred` curvature (the table's: a spline's ripples of curvature
+/// between its knots average out, a rounded corner's change does not),
+/// under a spread of variance `v` (px^2), `step` pixels apart; empty when
+/// no sample's curvature reaches the circle's correction.
+fn steadiness(blurred: &[f64], (v, step): (f64, f64), closed: bool) -> Vec<f64> {
+    if !blurred.iter().any(|&k| osculating::applies(v, k)) {
+        return Vec::new();
+    }
+    let n = blurred.len() as isize;
+    let half = (STEADY_REACH * v.sqrt() / step).ceil() as isize;
+    (0..n)
+        .map(|i| {
+            let k = blurred[i as usize];
+            if !osculating::applies(v, k) {
+                return 0.0;
+            }
+            let mut departs: f64 = 0.0;
+            for j in -half..=half {
+                let at = if closed {
+                    (i + j).rem_euclid(n)
+                } else if (0..n).contains(&(i + j)) {
+                    i + j
+                } else {
+                    continue;
+                };
+                departs = departs.max((blurred[at as usize] - k).abs());
+            }
+            let x = ((UNSTEADY - departs / k.abs()) / (UNSTEADY - STEADY)).clamp(0.0, 1.0);
+            x * x * (3.0 - 2.0 * x)
+        })
+        .collect()
+}
+
+/// Whether the pixel-edge profile of a band on `curve` under the optical
+/// `blur` (pixels) adds its blurred osculating circle somewhere, in full
+/// (`osculating.rs`; the weights of [`BlurredCurvature`]).
+pub(crate) fn osculating_reach(curve: &SplineCurve, blur: f64) -> bool {
+    let v = spread_variance(blur);
+    BlurredCurvature::new(curve, blur).is_some_and(|t| t.has_osculating(v))
 }
 
 #[cfg(test)]
@@ -159,6 +255,56 @@ mod tests {
         let expected = (-0.25 * v * k * k).exp();
         let ratio = averaged / local;
         assert!((ratio - expected).abs() < 0.01, "{ratio} vs {expected}");
+    }
+
+    /// The osculating circle's weight: 1 all round a disc of radius 6 px
+    /// under a 2.5 px blur (`q` = 0.42), none on a disc of 50 px under 3
+    /// px (0.06, under the correction's start), and on a square with
+    /// corners rounded on 3 px under a 2 px blur, 0 at the corners'
+    /// middles (curvature from 0 to 1/3 within the blur's reach) while the
+    /// sides have none to add.
+    #[test]
+    fn the_osculating_circle_counts_where_the_curvature_holds() {
+        let small = closed_curve(|_| 6.0);
+        let table = BlurredCurvature::new(&small, 2.5).unwrap();
+        let l = small.param_length();
+        for i in 0..50 {
+            let w = table.osculating_at(l * i as f64 / 50.0);
+            assert!((w - 1.0).abs() < 1e-12, "{w}");
+        }
+        let large = closed_curve(|_| 50.0);
+        assert!(!BlurredCurvature::new(&large, 3.0)
+            .unwrap()
+            .has_osculating(spread_variance(3.0)));
+        assert!(table.has_osculating(spread_variance(2.5)));
+        // A rounded square: half-side 40 px, corner radius 3 px.
+        let (h, c) = (40.0, 3.0);
+        let square = closed_curve(|th: f64| {
+            // The ray at `th` to the rounded square's boundary.
+            let (dx, dy) = (th.cos(), th.sin());
+            let (mut lo, mut hi) = (0.0, 2.0 * h);
+            for _ in 0..60 {
+                let m = 0.5 * (lo + hi);
+                let (x, y) = ((m * dx).abs(), (m * dy).abs());
+                let (qx, qy) = ((x - (h - c)).max(0.0), (y - (h - c)).max(0.0));
+                let inside = x <= h && y <= h && qx.hypot(qy) <= c;
+                if inside {
+                    lo = m;
+                } else {
+                    hi = m;
+                }
+            }
+            lo
+        });
+        let table = BlurredCurvature::new(&square, 2.0).unwrap();
+        let l = square.param_length();
+        let corners: Vec<f64> = (0..4).map(|k| l * (0.125 + 0.25 * k as f64)).collect();
+        for u in corners {
+            let w = table.osculating_at(u);
+            assert!(osculating::applies(spread_variance(2.0), table.at(u)));
+            assert!(w == 0.0, "corner at {u}: weight {w}");
+        }
+        assert_eq!(table.osculating_at(0.0), 0.0);
     }
 
     #[test]

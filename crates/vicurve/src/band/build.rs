@@ -142,6 +142,8 @@ pub(super) struct Candidate {
     wedges: Option<Box<[Option<CornerWedge>; MAX_WEDGES]>>,
     /// Their terms, summed.
     corner: f64,
+    /// The weight of the profile's blurred osculating circle.
+    osculating: f64,
 }
 
 /// Corners whose wedges a pixel takes at most: two, those at the ends of
@@ -195,14 +197,19 @@ impl Pixels<'_> {
     /// The band pixel at `foot`, whose parallel-curve Jacobian is
     /// `jacobian` (`1 - kappa r`, above [`MIN_JACOBIAN`]).
     pub fn candidate(&self, mut foot: Foot, jacobian: f64) -> Candidate {
+        let mut osculating = 0.0;
         if let Some(table) = self.blurred_curvature {
             foot.curvature = table.at(foot.s);
+            osculating = table.osculating_at(foot.s);
         }
         let mut values = [0.0; MAX_DEGREE + 1];
         let first = self.basis.eval(foot.s, &mut values) as u32;
-        let (gamma, dgamma) =
-            self.profile
-                .eval(foot.r, self.half_width, foot.normal, foot.curvature);
+        let (gamma, dgamma) = self.profile.eval_at(
+            foot.r,
+            self.half_width,
+            foot.normal,
+            (foot.curvature, osculating),
+        );
         Candidate {
             foot,
             first,
@@ -212,6 +219,7 @@ impl Pixels<'_> {
             weight: self.thin_weight() / jacobian,
             wedges: None,
             corner: 0.0,
+            osculating,
         }
     }
 }
@@ -315,6 +323,7 @@ impl Band {
             weight: Vec::with_capacity(total),
             full_weight: Vec::with_capacity(total),
             curvature: Vec::with_capacity(total),
+            osculating: Vec::new(),
             corner: Vec::new(),
             corner_wedges: Vec::new(),
         };
@@ -328,6 +337,12 @@ impl Band {
             }
             if !band.corner.is_empty() {
                 band.corner.push(c.corner);
+            }
+            if c.osculating > 0.0 && band.osculating.is_empty() {
+                band.osculating.resize(i, 0.0);
+            }
+            if !band.osculating.is_empty() {
+                band.osculating.push(c.osculating);
             }
             band.pos.push(c.foot.pos);
             band.normal.push(c.foot.normal);

@@ -85,6 +85,7 @@
 
 mod bend;
 mod blurred_curvature;
+pub(crate) use blurred_curvature::osculating_reach;
 mod build;
 mod coords;
 mod exact;
@@ -146,6 +147,9 @@ pub struct Band {
     pub(crate) full_weight: Vec<f64>,
     /// Signed curvature of the curve at the pixel's closest point, 1/px.
     pub(crate) curvature: Vec<f64>,
+    /// The weight of the pixel-edge profile's blurred osculating circle at
+    /// each pixel (`blurred_curvature.rs`); empty when it is 0 at all.
+    osculating: Vec<f64>,
     /// The corners' wedge terms in `gamma` (pixel-edge profile, see
     /// [`crate::virtual_image::corner`]); empty when no pixel has one.
     corner: Vec<f64>,
@@ -307,13 +311,24 @@ impl Band {
         if u == 0.0 && self.reference_curvature.is_empty() {
             return (self.gamma[i], self.dgamma[i]);
         }
-        let (gamma, dgamma) = self.profile.eval(
+        let (gamma, dgamma) = self.profile.eval_at(
             self.r[i] - u,
             self.half_width,
             self.normal[i],
-            self.curvature[i],
+            (self.curvature[i], self.osculating_at(i)),
         );
         (gamma + self.corner_at(i), dgamma)
+    }
+
+    /// The weight of the blurred osculating circle in pixel `i`'s profile
+    /// (0 for most pixels; see [`crate::virtual_image::Profile::eval_at`]).
+    #[inline]
+    pub(crate) fn osculating_at(&self, i: usize) -> f64 {
+        if self.osculating.is_empty() {
+            0.0
+        } else {
+            self.osculating[i]
+        }
     }
 
     /// The corners' wedge term in pixel `i`'s profile (0 for most pixels;

@@ -733,7 +733,12 @@ impl Correlation {
         };
         self.pushed_ssr_by(lambda, stride, |i, r| {
             profile
-                .eval(r, half_width, band.normal[i], band.curvature[i])
+                .eval_at(
+                    r,
+                    half_width,
+                    band.normal[i],
+                    (band.curvature[i], band.osculating_at(i)),
+                )
                 .0
                 + corner.as_ref().map_or(0.0, |c| c[i])
         })

@@ -83,8 +83,15 @@ pub(super) fn fit_anisotropy(
             let n = band.normal[i];
             let (_, along, cross) = current.blurs(blur, n);
             let blurs = (shape.blurs(mean, n).0, along, cross);
-            curved_edge(r, n[0], n[1], blurs, band.curvature[i]).0
-                + corner.as_ref().map_or(0.0, |c| c[i])
+            curved_edge(
+                r,
+                n[0],
+                n[1],
+                blurs,
+                band.curvature[i],
+                band.osculating_at(i),
+            )
+            .0 + corner.as_ref().map_or(0.0, |c| c[i])
         })
         .filter(|f| f.is_finite())
     };

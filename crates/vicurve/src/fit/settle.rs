@@ -30,9 +30,13 @@
 //! a basis with breaks keeps `U` (its elements are not uniform across a
 //! corner), and so does a reference whose curvature leaves the reach of
 //! the profile's curved edge (a corner no break declares: the gain above
-//! does not describe it); without blur there is no feedback to undo.
+//! does not describe it) or reaches that of the blurred osculating circle
+//! in full (`virtual_image/osculating.rs`: its terms change the profile's
+//! answer to the curvature, which the gain leaves out); without blur there
+//! is no feedback to undo.
 
 use super::blur::{gain_of, within_curved_edge_reach};
+use crate::band::osculating_reach;
 use crate::curve::SplineCurve;
 use crate::spline::Basis;
 use crate::virtual_image::pixel_edge::spread_variance;
@@ -52,7 +56,8 @@ pub(super) fn extrapolated(
         && blur > 0.0
         && basis.breaks().is_empty()
         && lambda.len() == basis.n_functions()
-        && within_curved_edge_reach(reference, blur);
+        && within_curved_edge_reach(reference, blur)
+        && !osculating_reach(reference, blur);
     if !applies {
         return None;
     }

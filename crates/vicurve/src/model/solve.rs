@@ -64,17 +64,19 @@ const BLUR_FIT_TOLERANCE: f64 = 1e-5;
 const BLUR_FIT_ITERATIONS: usize = 6;
 
 /// `(gamma, dgamma/dd)` of the profile at signed distance `d` (the
-/// pixel-edge profile with its curvature shift, or the paper's profile
-/// centred `blur_variance kappa / 2` from the curve).
+/// pixel-edge profile with its curvature shift, and the weight
+/// `osculating` of its blurred osculating circle: 1 on a circle, whose
+/// curvature is constant, 0 elsewhere; or the paper's profile centred
+/// `blur_variance kappa / 2` from the curve).
 pub(crate) fn profile_at(
     profile: ModelProfile,
     d: f64,
     normal: [f64; 2],
-    curvature: f64,
+    (curvature, osculating): (f64, f64),
 ) -> (f64, f64) {
     match profile {
         ModelProfile::PixelEdge { blur } => {
-            Profile::pixel_edge(blur).eval(d, 1.0, normal, curvature)
+            Profile::pixel_edge(blur).eval_at(d, 1.0, normal, (curvature, osculating))
         }
         ModelProfile::Paper {
             kind,
@@ -103,7 +105,11 @@ fn pixel_model(
             curvature,
             grad,
         } => {
-            let (v, dv) = profile_at(profile, d, normal, curvature);
+            let osculating = match geom {
+                Geometry::Circle(_) => 1.0,
+                _ => 0.0,
+            };
+            let (v, dv) = profile_at(profile, d, normal, (curvature, osculating));
             let mut g = Grad::new();
             for (i, gi) in grad.iter() {
                 g.add(i, dv * gi);

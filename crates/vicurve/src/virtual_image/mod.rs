@@ -23,6 +23,7 @@
 
 pub mod anisotropy;
 pub mod corner;
+pub(crate) mod osculating;
 pub mod pixel_edge;
 mod polarity;
 mod psi;
@@ -163,9 +164,27 @@ impl Profile {
     /// `(gamma, d gamma / d r)` at signed distance `r` (pixels) from the
     /// curve, for a band of half-width `half_width` (pixels), at a point whose
     /// closest point on the curve has unit normal `normal` and signed
-    /// curvature `curvature` (1/px).
+    /// curvature `curvature` (1/px), taken as constant over the blur (a
+    /// circle's: [`Profile::eval_at`] with a weight of 1).
     #[inline]
     pub fn eval(self, r: f64, half_width: f64, normal: [f64; 2], curvature: f64) -> (f64, f64) {
+        self.eval_at(r, half_width, normal, (curvature, 1.0))
+    }
+
+    /// [`Profile::eval`] with the weight `osculating` (0 to 1) of the pixel
+    /// edge's blurred osculating circle beyond its expansion
+    /// (`pixel_edge::curved_edge`): 1 where the curvature is constant over
+    /// the blur, 0 where it changes fast (a rounded corner), whose
+    /// osculating circle is no model of the edge
+    /// (`band/blurred_curvature.rs`).
+    #[inline]
+    pub fn eval_at(
+        self,
+        r: f64,
+        half_width: f64,
+        normal: [f64; 2],
+        (curvature, osculating): (f64, f64),
+    ) -> (f64, f64) {
         match self {
             Profile::Paper { kind } => {
                 let rho = r / half_width;
@@ -173,7 +192,7 @@ impl Profile {
             }
             Profile::PixelEdge { blur, anisotropy } => {
                 let blurs = anisotropy.blurs(blur, normal);
-                pixel_edge::curved_edge(r, normal[0], normal[1], blurs, curvature)
+                pixel_edge::curved_edge(r, normal[0], normal[1], blurs, curvature, osculating)
             }
             Profile::PixelLine { blur, width } => {
                 // The bar between its sides at `r = -w/2` and `r = w/2`:
@@ -181,7 +200,8 @@ impl Profile {
                 // on the bright side of the inner one.
                 let half = 0.5 * width;
                 let side = |r: f64| {
-                    pixel_edge::curved_edge(r, normal[0], normal[1], (blur, blur, 0.0), curvature)
+                    let blurs = (blur, blur, 0.0);
+                    pixel_edge::curved_edge(r, normal[0], normal[1], blurs, curvature, osculating)
                 };
                 let ((outer, d_outer), (inner, d_inner)) = (side(r - half), side(r + half));
                 (outer - inner, d_outer - d_inner)

@@ -583,7 +583,7 @@ fn levels(
     for (px, &u) in pixels.iter().zip(feet) {
         let pr = curve.project(px.q[0], px.q[1], u);
         let (g, _) =
-            crate::model::solve::profile_at(problem.profile, pr.r, pr.normal, pr.curvature);
+            crate::model::solve::profile_at(problem.profile, pr.r, pr.normal, (pr.curvature, 0.0));
         n += 1.0;
         sg += g;
         sgg += g * g;

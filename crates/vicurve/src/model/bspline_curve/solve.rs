@@ -94,7 +94,7 @@ impl Problem<'_> {
         for (px, &u0) in pixels.iter().zip(feet) {
             let pr = curve.project(px.q[0], px.q[1], u0);
             out_feet.push(pr.u);
-            let (gamma, dgamma) = profile_at(self.profile, pr.r, pr.normal, pr.curvature);
+            let (gamma, dgamma) = profile_at(self.profile, pr.r, pr.normal, (pr.curvature, 0.0));
             let e = px.f - a - c * gamma;
             let first = basis.eval(pr.u, &mut nv);
             let len = 2 * (p + 1);
