@@ -32,11 +32,11 @@
 //! or in a star's bay, where the curvature changes within the blur's reach
 //! and the osculating circle's higher terms are no better than the
 //! expansion's (docs/benchmarks.md, "The blurred osculating circle"). The
-//! table also holds, per sample,
-//! the weight of those terms: 1 where the local curvature stays within
-//! [`STEADY`] of its own value over [`STEADY_REACH`] spreads each way
-//! along the curve (the averaged curvature, both), 0 where it departs by [`UNSTEADY`] (a smooth step
-//! between), and 0 wherever they add nothing.
+//! table also holds, per sample, the weight of those terms: 1 where the
+//! averaged curvature stays within [`STEADY`] of its own value over
+//! [`STEADY_REACH`] spreads each way along the curve, 0 where it departs
+//! by [`UNSTEADY`] (a smooth step between), and 0 wherever they add
+//! nothing.
 
 use crate::curve::SplineCurve;
 use crate::virtual_image::osculating;

@@ -148,7 +148,8 @@ pub struct Band {
     /// Signed curvature of the curve at the pixel's closest point, 1/px.
     pub(crate) curvature: Vec<f64>,
     /// The weight of the pixel-edge profile's blurred osculating circle at
-    /// each pixel (`blurred_curvature.rs`); empty when it is 0 at all.
+    /// each pixel (`blurred_curvature.rs`); empty when it is 0 at every
+    /// pixel.
     osculating: Vec<f64>,
     /// The corners' wedge terms in `gamma` (pixel-edge profile, see
     /// [`crate::virtual_image::corner`]); empty when no pixel has one.

@@ -6,12 +6,14 @@
 //! `kappa` the curvature). A small disc under a heavy blur is beyond it: a
 //! disc a few spreads across came out too large by many times its sigma
 //! (docs/benchmarks.md, "The blurred osculating circle"). Near a point of
-//! the edge the image is, to the order
-//! that matters there, that of the osculating disc (radius `1 / |kappa|`),
-//! whose blurred level is exact: under an isotropic Gaussian of variance
-//! `v`, a point at distance `d` from the centre of a disc of radius `rho`
-//! sees the disc with the probability `P(|Y| <= rho / s)`, `Y ~ N((d / s,
-//! 0), I)` (one minus Marcum's `Q1(d / s, rho / s)`). This module tabulates
+//! the edge the image is, to the order that matters there, that of the
+//! osculating disc (radius `1 / |kappa|`), whose blurred level is exact
+//! where the curvature holds over the blur: under an isotropic Gaussian
+//! of variance `v`, a point at distance `d` from the centre of a disc of
+//! radius `rho` sees the disc with the probability `P(|Y| <= rho / s)`,
+//! `Y ~ N((d / s, 0), I)` (one minus Marcum's `Q1(d / s, rho / s)`). The
+//! band weighs the correction by how well the curvature holds
+//! (`band/blurred_curvature.rs`). This module tabulates
 //! the difference between that level and the expansion's (with the
 //! pixel's own spread taken as Gaussian in both, so that the square
 //! pixel's part cancels), `C(t, q)` with `t = r / s`, which the curved edge
@@ -34,7 +36,7 @@
 //!
 //! # Accuracy
 //! The table holds `C` and `dC/dt` every [`T_STEP`] in `t` (cubic Hermite
-//! between) and every [`Q_STEP`] in `q` (linear between); tested against
+//! between) and every [`Q_STEP`] in `q` (cubic between); tested against
 //! the blurred disc's integral in `pixel_edge.rs`. Beyond [`Q_MAX`] (a
 //! radius of curvature under half the spread) `q` is taken as `Q_MAX`.
 
@@ -43,8 +45,8 @@ use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::sync::OnceLock;
 
-/// The correction starts at this `|q|` (it is of the order `q^5`, under
-/// `1e-5` of the spread below), ...
+/// The correction starts at this `|q|` (below it the expansion holds: the
+/// blurred-disc test of `pixel_edge.rs`), ...
 const Q_START: f64 = 0.1;
 /// ... and counts in full from this one (a smooth step between).
 const Q_FULL: f64 = 0.2;

@@ -7,7 +7,7 @@
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig};
 use vicurve::render::render;
-use vicurve::truth::{evaluate, Shape};
+use vicurve::truth::{evaluate, ErrorStats, Shape};
 
 use crate::common::spec;
 
@@ -111,6 +111,29 @@ fn the_mean_position_scatters_near_its_bound() {
     assert!(sd <= 1.55 * bound, "{sd:.2e} px against {bound:.2e} px");
 }
 
+/// A disc of radius `r` (px) under the blur `blur` (px), 16-bit and
+/// noiseless, in a square image `size` px wide, its centre off the pixel
+/// grid, measured from the circle `start` = (centre offset along x,
+/// radius offset) away: the errors to the disc, the outcome, and the
+/// last stage's fitted blur.
+fn blurred_disc(r: f64, blur: f64, size: usize, start: (f64, f64)) -> (ErrorStats, String, f64) {
+    use vicurve::virtual_image::Profile;
+    let (cx, cy) = (size as f64 / 2.0 + 0.3, size as f64 / 2.0 - 0.4);
+    let shape = Shape::Circle { cx, cy, r };
+    let image = render(&spec(shape.clone(), (size, size), blur, 0.0, 1, Some(16))).unwrap();
+    let init = InitialCurve::Circle {
+        cx: cx + start.0,
+        cy,
+        r: r + start.1,
+    };
+    let m = measure(&image, &init, &FitConfig::default()).unwrap();
+    let e = evaluate(&m.points(), &shape).unwrap();
+    let Some(Profile::PixelEdge { blur: fitted, .. }) = m.stages.last().map(|s| s.profile) else {
+        panic!("r {r}: no pixel-edge stage");
+    };
+    (e, m.outcome.to_string(), fitted)
+}
+
 /// Discs a few blurs across (16-bit, noiseless): holes of a plate, dots of
 /// a circle grid out of focus. Where the spread is 0.3 to 0.45 of the
 /// radius the curved edge's expansion in `v kappa` no longer holds; the
@@ -119,25 +142,11 @@ fn the_mean_position_scatters_near_its_bound() {
 /// first 0.063 px too large) and the blur within 0.03 px.
 #[test]
 fn a_disc_a_few_blurs_across_keeps_its_radius() {
-    use vicurve::virtual_image::Profile;
     for (r, blur) in [(6.0, 2.5), (4.5, 1.5), (8.0, 2.5)] {
-        let (cx, cy) = (40.3, 39.6);
-        let shape = Shape::Circle { cx, cy, r };
-        let image = render(&spec(shape.clone(), (80, 80), blur, 0.0, 1, Some(16))).unwrap();
-        let init = InitialCurve::Circle {
-            cx: cx + 0.7,
-            cy,
-            r: r + 0.5,
-        };
-        let m = measure(&image, &init, &FitConfig::default()).unwrap();
-        let e = evaluate(&m.points(), &shape).unwrap();
-        let Some(Profile::PixelEdge { blur: fitted, .. }) = m.stages.last().map(|s| s.profile)
-        else {
-            panic!("r {r}: no pixel-edge stage");
-        };
+        let (e, outcome, fitted) = blurred_disc(r, blur, 80, (0.7, 0.5));
         println!(
-            "r {r}, blur {blur}: {}, fitted blur {fitted:.4}; bias {:+.2e} scatter {:.2e}",
-            m.outcome, e.bias, e.scatter
+            "r {r}, blur {blur}: {outcome}, fitted blur {fitted:.4}; bias {:+.2e} scatter {:.2e}",
+            e.bias, e.scatter
         );
         assert!(e.bias.abs() < 4e-3, "r {r}: {e:?}");
         assert!((fitted - blur).abs() < 0.03, "r {r}: blur {fitted}");
@@ -153,22 +162,8 @@ fn a_disc_a_few_blurs_across_keeps_its_radius() {
 /// the bias within a fraction of that term.
 #[test]
 fn a_small_disc_under_a_heavy_blur_keeps_its_radius() {
-    use vicurve::virtual_image::Profile;
     for (r, blur, max_bias) in [(20.0, 4.0, 2.5e-3), (30.0, 4.0, 4e-4), (15.0, 3.0, 2e-3)] {
-        let (cx, cy) = (100.3, 99.6);
-        let shape = Shape::Circle { cx, cy, r };
-        let image = render(&spec(shape.clone(), (200, 200), blur, 0.0, 1, Some(16))).unwrap();
-        let init = InitialCurve::Circle {
-            cx: cx + 1.0,
-            cy,
-            r: r + 1.0,
-        };
-        let m = measure(&image, &init, &FitConfig::default()).unwrap();
-        let e = evaluate(&m.points(), &shape).unwrap();
-        let Some(Profile::PixelEdge { blur: fitted, .. }) = m.stages.last().map(|s| s.profile)
-        else {
-            panic!("r {r}: no pixel-edge stage");
-        };
+        let (e, _, fitted) = blurred_disc(r, blur, 200, (1.0, 1.0));
         println!(
             "r {r}, blur {blur}: fitted blur {fitted:.4}; bias {:+.2e} scatter {:.2e}",
             e.bias, e.scatter

@@ -9,6 +9,7 @@ use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, Divergence, Elements, FitConfig, Measurement, Outcome};
 use vicurve::render::{render, RenderSpec};
 use vicurve::truth::{evaluate, Shape};
+use vicurve::Image;
 
 use crate::common::{disc, spec};
 
@@ -18,22 +19,7 @@ use crate::common::{disc, spec};
 /// `(1 + a) / 0.85 - 1` (41 % for `a = 0.2`, 53 % for 0.3) beyond it,
 /// farther than any band half-width, and the valleys cross inside it.
 fn far_star(lobes: u32, a: f64, config: FitConfig) {
-    let (cx, cy, r0) = (450.3, 449.8, 300.0);
-    let shape = Shape::Star {
-        cx,
-        cy,
-        r0,
-        amplitude: a,
-        lobes,
-        phase: 0.0,
-    };
-    let spec = spec(shape, (900, 900), 1.5, 0.01, 3, Some(8));
-    let image = render(&spec).expect("render");
-    let init = InitialCurve::Circle {
-        cx,
-        cy,
-        r: 0.85 * r0,
-    };
+    let (spec, image, init) = far_star_image(lobes, a);
     let m = measure(&image, &init, &config).expect("measure");
     let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
     println!(
@@ -52,6 +38,27 @@ fn far_star(lobes: u32, a: f64, config: FitConfig) {
         s.max_abs,
         s.scatter
     );
+}
+
+/// The star of [`far_star`], its image and its start.
+fn far_star_image(lobes: u32, a: f64) -> (RenderSpec, Image, InitialCurve) {
+    let (cx, cy, r0) = (450.3, 449.8, 300.0);
+    let shape = Shape::Star {
+        cx,
+        cy,
+        r0,
+        amplitude: a,
+        lobes,
+        phase: 0.0,
+    };
+    let spec = spec(shape, (900, 900), 1.5, 0.01, 3, Some(8));
+    let image = render(&spec).expect("render");
+    let init = InitialCurve::Circle {
+        cx,
+        cy,
+        r: 0.85 * r0,
+    };
+    (spec, image, init)
 }
 
 #[test]
@@ -170,22 +177,7 @@ fn a_curve_off_the_edge_is_diverged() {
 /// default schedule measures the same image.
 #[test]
 fn elements_too_long_for_the_bays_do_not_follow_the_edge() {
-    let (cx, cy, r0) = (450.3, 449.8, 300.0);
-    let shape = Shape::Star {
-        cx,
-        cy,
-        r0,
-        amplitude: 0.3,
-        lobes: 6,
-        phase: 0.0,
-    };
-    let spec = spec(shape, (900, 900), 1.5, 0.01, 3, Some(8));
-    let image = render(&spec).expect("render");
-    let init = InitialCurve::Circle {
-        cx,
-        cy,
-        r: 0.85 * r0,
-    };
+    let (spec, image, init) = far_star_image(6, 0.3);
     let paper = FitConfig {
         stages: stages(&[
             (20.0, Elements::Count(25)),
