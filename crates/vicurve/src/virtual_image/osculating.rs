@@ -301,7 +301,7 @@ mod tests {
                 .sum::<f64>()
                 / n as f64
         };
-        for q in [0.12, 0.4, 0.9, 2.0] {
+        for q in [0.06, 0.12, 0.4, 0.9, 2.0] {
             let b = 1.0 / q;
             for t in [-3.0, -1.0, 0.0, 0.5, 2.0] {
                 let (_, slope) = disc_level(t, q, &rule);
