@@ -41,7 +41,6 @@
 //! radius of curvature under half the spread) `q` is taken as `Q_MAX`.
 
 use super::pixel_edge::normal_cdf_pdf;
-use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::sync::OnceLock;
 
@@ -62,9 +61,13 @@ const T_STEP: f64 = 0.1;
 /// Gauss–Legendre nodes of the exact level's quadrature.
 const NODES: usize = 64;
 
-/// `C(t, q)` and `dC/dt` on the grid, by `q` then `t`.
+/// `C(t, q)` and `dC/dt` on the grid, a column of `t` per `q`, each
+/// column computed the first time it is read (a curve reads the few
+/// around its own `q`; the whole table took tens of milliseconds, more
+/// than measuring a small disc).
 struct Table {
-    values: Vec<[f64; 2]>,
+    rule: Vec<(f64, f64)>,
+    columns: Vec<OnceLock<Vec<[f64; 2]>>>,
 }
 
 const T_COUNT: usize = (2.0 * T_REACH / T_STEP) as usize + 1;
@@ -72,29 +75,29 @@ const Q_COUNT: usize = (Q_MAX / Q_STEP) as usize + 1;
 
 fn table() -> &'static Table {
     static TABLE: OnceLock<Table> = OnceLock::new();
-    TABLE.get_or_init(Table::build)
+    TABLE.get_or_init(|| Table {
+        rule: legendre(NODES),
+        columns: (0..Q_COUNT).map(|_| OnceLock::new()).collect(),
+    })
 }
 
 impl Table {
-    fn build() -> Table {
-        let rule = legendre(NODES);
-        let values = (0..Q_COUNT)
-            .into_par_iter()
-            .flat_map_iter(|j| {
-                let q = j as f64 * Q_STEP;
-                let rule = &rule;
-                (0..T_COUNT).map(move |i| {
+    /// Column `j` (`q = j Q_STEP`), computed on first use.
+    fn values(&self, j: usize) -> &[[f64; 2]] {
+        self.columns[j].get_or_init(|| {
+            let q = j as f64 * Q_STEP;
+            (0..T_COUNT)
+                .map(|i| {
                     if q < 0.5 * Q_START {
                         return [0.0; 2];
                     }
                     let t = -T_REACH + i as f64 * T_STEP;
-                    let (exact, d_exact) = disc_level(t, q, rule);
+                    let (exact, d_exact) = disc_level(t, q, &self.rule);
                     let (model, d_model) = expansion(t, q);
                     [exact - model, d_exact - d_model]
                 })
-            })
-            .collect();
-        Table { values }
+                .collect()
+        })
     }
 
     /// `(C, dC/dt)` at `t` on the table's column `j` of `q`.
@@ -102,8 +105,9 @@ impl Table {
         let x = (t + T_REACH) / T_STEP;
         let i = (x.floor() as usize).min(T_COUNT - 2);
         let w = x - i as f64;
-        let [f0, d0] = self.values[j * T_COUNT + i];
-        let [f1, d1] = self.values[j * T_COUNT + i + 1];
+        let values = self.values(j);
+        let [f0, d0] = values[i];
+        let [f1, d1] = values[i + 1];
         let (d0, d1) = (d0 * T_STEP, d1 * T_STEP);
         // Cubic Hermite on [0, 1] and its derivative.
         let (w2, w3) = (w * w, w * w * w);
