@@ -132,17 +132,6 @@ impl BlurredCurvature {
         self.osculating[k as usize]
     }
 
-    /// Whether the osculating circle counts (in full, by at least half
-    /// its weight) somewhere along the curve under a spread of variance
-    /// `v` (px^2): where it barely starts it changes the profile's answer
-    /// to the curvature by little.
-    pub(super) fn has_osculating(&self, v: f64) -> bool {
-        self.osculating
-            .iter()
-            .zip(&self.values)
-            .any(|(&w, &k)| w >= 0.5 && osculating::in_full(v, k))
-    }
-
     /// The averaged curvature at parameter `u`, 1/px (linear between the
     /// samples).
     pub(super) fn at(&self, u: f64) -> f64 {
@@ -194,14 +183,6 @@ fn steadiness(blurred: &[f64], (v, step): (f64, f64), closed: bool) -> Vec<f64> 
             x * x * (3.0 - 2.0 * x)
         })
         .collect()
-}
-
-/// Whether the pixel-edge profile of a band on `curve` under the optical
-/// `blur` (pixels) adds its blurred osculating circle somewhere, in full
-/// (`osculating.rs`; the weights of [`BlurredCurvature`]).
-pub(crate) fn osculating_reach(curve: &SplineCurve, blur: f64) -> bool {
-    let v = spread_variance(blur);
-    BlurredCurvature::new(curve, blur).is_some_and(|t| t.has_osculating(v))
 }
 
 #[cfg(test)]
@@ -269,14 +250,16 @@ mod tests {
         let table = BlurredCurvature::new(&small, 2.5).unwrap();
         let l = small.param_length();
         for i in 0..50 {
-            let w = table.osculating_at(l * i as f64 / 50.0);
+            let u = l * i as f64 / 50.0;
+            let w = table.osculating_at(u);
             assert!((w - 1.0).abs() < 1e-12, "{w}");
+            // ... and in full there.
+            assert!(osculating::in_full(spread_variance(2.5), table.at(u)));
         }
         let large = closed_curve(|_| 50.0);
-        assert!(!BlurredCurvature::new(&large, 3.0)
-            .unwrap()
-            .has_osculating(spread_variance(3.0)));
-        assert!(table.has_osculating(spread_variance(2.5)));
+        let wide = BlurredCurvature::new(&large, 3.0).unwrap();
+        let l = large.param_length();
+        assert!((0..200).all(|i| wide.osculating_at(l * i as f64 / 200.0) == 0.0));
         // A rounded square: half-side 40 px, corner radius 3 px.
         let (h, c) = (40.0, 3.0);
         let square = closed_curve(|th: f64| {

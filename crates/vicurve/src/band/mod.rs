@@ -85,7 +85,6 @@
 
 mod bend;
 mod blurred_curvature;
-pub(crate) use blurred_curvature::osculating_reach;
 mod build;
 mod coords;
 mod exact;
@@ -102,6 +101,8 @@ pub use raster::BandScratch;
 use crate::curve::SplineCurve;
 use crate::error::Result;
 use crate::spline::Basis;
+use crate::virtual_image::osculating;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::{Anisotropy, Profile};
 
 /// Pixels (and levelset mesh nodes) whose parallel-curve Jacobian
@@ -325,11 +326,20 @@ impl Band {
     /// (0 for most pixels; see [`crate::virtual_image::Profile::eval_at`]).
     #[inline]
     pub(crate) fn osculating_at(&self, i: usize) -> f64 {
-        if self.osculating.is_empty() {
-            0.0
-        } else {
-            self.osculating[i]
-        }
+        sparse_at(&self.osculating, i)
+    }
+
+    /// Whether the pixel-edge profile's blurred osculating circle counts
+    /// in full, by at least half its weight, at some pixel
+    /// (`blurred_curvature.rs`): where it barely starts it changes the
+    /// profile's answer to the curvature by little.
+    pub(crate) fn osculates(&self) -> bool {
+        let Profile::PixelEdge { blur, .. } = self.profile else {
+            return false;
+        };
+        let v = spread_variance(blur);
+        (0..self.len())
+            .any(|i| self.osculating_at(i) >= 0.5 && osculating::in_full(v, self.curvature[i]))
     }
 
     /// The corners' wedge term in pixel `i`'s profile (0 for most pixels;
@@ -338,11 +348,7 @@ impl Band {
     /// the displacement is negligible.
     #[inline]
     pub(crate) fn corner_at(&self, i: usize) -> f64 {
-        if self.corner.is_empty() {
-            0.0
-        } else {
-            self.corner[i]
-        }
+        sparse_at(&self.corner, i)
     }
 
     /// Every pixel's wedge term under the pixel-edge profile of blur `blur`
@@ -399,6 +405,13 @@ fn displacement(basis: &Basis, first: u32, values: &[f64], lambda: &[f64]) -> f6
         .enumerate()
         .map(|(k, v)| lambda[basis.index(first, k)] * v)
         .sum()
+}
+
+/// Pixel `i`'s value of a per-pixel term that most bands do not have
+/// (kept empty then): 0 for an empty one.
+#[inline]
+fn sparse_at(values: &[f64], i: usize) -> f64 {
+    values.get(i).copied().unwrap_or(0.0)
 }
 
 #[cfg(test)]

@@ -36,7 +36,6 @@
 //! is no feedback to undo.
 
 use super::blur::{gain_of, within_curved_edge_reach};
-use crate::band::osculating_reach;
 use crate::curve::SplineCurve;
 use crate::spline::Basis;
 use crate::virtual_image::pixel_edge::spread_variance;
@@ -44,20 +43,22 @@ use std::f64::consts::TAU;
 
 /// The displacement that moves `reference` to the settles' fixed point
 /// for the run's displacement `lambda` (control values on `basis`, pixels)
-/// under an optical blur of `blur` pixels; `None` where `U` itself serves
-/// (see the [module docs](self) for when).
+/// under an optical blur of `blur` pixels, on a band whose profile takes
+/// its blurred osculating circle in full somewhere or not (`osculates`,
+/// [`crate::band::Band::osculates`]); `None` where `U` itself serves (see
+/// the [module docs](self) for when).
 pub(super) fn extrapolated(
     lambda: &[f64],
     basis: &Basis,
     reference: &SplineCurve,
-    blur: f64,
+    (blur, osculates): (f64, bool),
 ) -> Option<Vec<f64>> {
     let applies = blur.is_finite()
         && blur > 0.0
         && basis.breaks().is_empty()
         && lambda.len() == basis.n_functions()
         && within_curved_edge_reach(reference, blur)
-        && !osculating_reach(reference, blur);
+        && !osculates;
     if !applies {
         return None;
     }
@@ -185,7 +186,7 @@ mod tests {
         let basis = Basis::new(3, n, n as f64 * h, true).unwrap();
         let circle = reference(n as f64 * h, true);
         let lambda: Vec<f64> = (0..n).map(|j| (0.5 * TAU * j as f64).cos()).collect();
-        let out = extrapolated(&lambda, &basis, &circle, blur).unwrap();
+        let out = extrapolated(&lambda, &basis, &circle, (blur, false)).unwrap();
         let k = 0.5 * TAU / h;
         let g = gain_of(0.5 * spread_variance(blur) * k * k);
         assert!(g > 0.5, "gain {g}");
@@ -193,7 +194,7 @@ mod tests {
             assert!((o - l / (1.0 - g)).abs() < 1e-12);
         }
         // A constant (k = 0) has no gain.
-        let out = extrapolated(&[0.3; 64], &basis, &circle, blur).unwrap();
+        let out = extrapolated(&[0.3; 64], &basis, &circle, (blur, false)).unwrap();
         assert!(out.iter().all(|o| (o - 0.3).abs() < 1e-12));
     }
 
@@ -204,7 +205,7 @@ mod tests {
         let lambda: Vec<f64> = (0..basis.n_functions())
             .map(|j| (j as f64 * 1.3).sin())
             .collect();
-        let out = extrapolated(&lambda, &basis, &line, 2.0).unwrap();
+        let out = extrapolated(&lambda, &basis, &line, (2.0, false)).unwrap();
         let n = lambda.len();
         assert_eq!(&out[..4], &lambda[..4]);
         assert_eq!(&out[n - 4..], &lambda[n - 4..]);
@@ -215,10 +216,13 @@ mod tests {
     }
 
     #[test]
-    fn corners_blur_free_profiles_and_breaks_keep_the_displacement() {
+    fn corners_blur_free_profiles_osculating_bands_and_breaks_keep_the_displacement() {
         let basis = Basis::new(3, 40, 200.0, true).unwrap();
         let lambda = vec![0.1; basis.n_functions()];
-        assert!(extrapolated(&lambda, &basis, &reference(200.0, true), 0.0).is_none());
+        assert!(extrapolated(&lambda, &basis, &reference(200.0, true), (0.0, false)).is_none());
+        // A band whose profile takes its osculating circle in full.
+        assert!(extrapolated(&lambda, &basis, &reference(200.0, true), (2.0, true)).is_none());
+        assert!(extrapolated(&lambda, &basis, &reference(200.0, true), (2.0, false)).is_some());
         // A square 50 px a side: its corners, rounded by the fit, are far
         // beyond the curved edge's reach under a 2 px blur.
         let square: Vec<[f64; 2]> = (0..200)
@@ -233,13 +237,13 @@ mod tests {
             })
             .collect();
         let square = SplineCurve::fit(&square, true, 3, 1.0).unwrap();
-        assert!(extrapolated(&lambda, &basis, &square, 2.0).is_none());
+        assert!(extrapolated(&lambda, &basis, &square, (2.0, false)).is_none());
         let corner = [crate::spline::Break {
             at: 70.0,
             multiplicity: 3,
         }];
         let broken = Basis::with_breaks(3, 30, 150.0, false, &corner).unwrap();
         let lambda = vec![0.1; broken.n_functions()];
-        assert!(extrapolated(&lambda, &broken, &reference(150.0, false), 2.0).is_none());
+        assert!(extrapolated(&lambda, &broken, &reference(150.0, false), (2.0, false)).is_none());
     }
 }

@@ -821,7 +821,8 @@ impl Schedule<'_> {
                 Some(Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. })
                     if !again =>
                 {
-                    settle::extrapolated(&lambda, corr.basis(), &self.current, blur)
+                    let osculates = corr.band().osculates();
+                    settle::extrapolated(&lambda, corr.basis(), &self.current, (blur, osculates))
                 }
                 _ => None,
             };
