@@ -56,7 +56,7 @@ const STEADY_REACH: f64 = 2.0;
 
 /// The reference's curvature averaged over the blur, sampled along its
 /// parameter (see the [module docs](self)).
-pub(super) struct BlurredCurvature {
+pub(crate) struct BlurredCurvature {
     closed: bool,
     step: f64,
     values: Vec<f64>,
@@ -68,7 +68,7 @@ pub(super) struct BlurredCurvature {
 impl BlurredCurvature {
     /// The table for `curve` under the optical `blur` (pixels); `None` when
     /// there is no blur to average over.
-    pub(super) fn new(curve: &SplineCurve, blur: f64) -> Option<Self> {
+    pub(crate) fn new(curve: &SplineCurve, blur: f64) -> Option<Self> {
         if !(blur.is_finite() && blur > 0.0) {
             return None;
         }
@@ -118,7 +118,7 @@ impl BlurredCurvature {
 
     /// The osculating circle's weight at parameter `u` (0 to 1; that of
     /// the nearest sample).
-    pub(super) fn osculating_at(&self, u: f64) -> f64 {
+    pub(crate) fn osculating_at(&self, u: f64) -> f64 {
         if self.osculating.is_empty() {
             return 0.0;
         }
@@ -134,7 +134,7 @@ impl BlurredCurvature {
 
     /// The averaged curvature at parameter `u`, 1/px (linear between the
     /// samples).
-    pub(super) fn at(&self, u: f64) -> f64 {
+    pub(crate) fn at(&self, u: f64) -> f64 {
         let n = self.values.len();
         let x = u / self.step;
         let i = x.floor();

@@ -194,6 +194,23 @@ impl Pixels<'_> {
         }
     }
 
+    /// The weight of a pixel whose parallel-curve Jacobian is `jacobian`:
+    /// `1 / jacobian` for the paper's profiles, whose sums stand for
+    /// integrals over the band in `(s, r)` (the method's); 1 for the
+    /// pushed ones (pixel edge and line), which model each pixel's value:
+    /// every pixel carries the same noise, so equal weights make the
+    /// least-squares estimate and its Gauss–Newton covariance those of
+    /// the noise. Why: on a dot a blur or so across the Jacobian falls
+    /// to 0.1 near its centre, and those few pixels' noise, weighted up to
+    /// tenfold, moved its radius by several `sigma` (docs/benchmarks.md).
+    fn area_weight(&self, jacobian: f64) -> f64 {
+        if self.profile.is_pushed() {
+            1.0
+        } else {
+            1.0 / jacobian
+        }
+    }
+
     /// The band pixel at `foot`, whose parallel-curve Jacobian is
     /// `jacobian` (`1 - kappa r`, above [`MIN_JACOBIAN`]).
     pub fn candidate(&self, mut foot: Foot, jacobian: f64) -> Candidate {
@@ -216,7 +233,7 @@ impl Pixels<'_> {
             basis: values,
             gamma,
             dgamma,
-            weight: self.thin_weight() / jacobian,
+            weight: self.thin_weight() * self.area_weight(jacobian),
             wedges: None,
             corner: 0.0,
             osculating,

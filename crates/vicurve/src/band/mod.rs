@@ -12,7 +12,9 @@
 //! once per reference: `s`, `r`, the normal, the `p + 1` non-zero
 //! displacement basis values at `s`, the virtual image profile
 //! `gamma` with its derivative, the curvature at the foot and the pixel's
-//! weight `1 / (1 - kappa r)`.
+//! weight: `1 / (1 - kappa r)` for the paper's profiles (the band's
+//! integral in `(s, r)`), 1 for the pushed ones, which model each pixel
+//! (`build.rs`, `area_weight`).
 //!
 //! The steps, one a file:
 //! - `build`: [`BandParams`] checked against the curve and the image
@@ -93,6 +95,7 @@ mod levelset_rows;
 mod raster;
 mod window;
 
+pub(crate) use blurred_curvature::BlurredCurvature;
 pub use build::BandParams;
 pub(crate) use build::{check_inside, inside_stretch};
 pub use coords::Coords;
@@ -144,7 +147,8 @@ pub struct Band {
     /// The weight each pixel counts with: [`Band::full_weights`], or 0 out
     /// of the window (module docs).
     pub(crate) weight: Vec<f64>,
-    /// `1 / (1 - kappa r)` (see the module docs), times any robust factor.
+    /// `1 / (1 - kappa r)` or 1 (see the module docs), times any robust
+    /// factor.
     pub(crate) full_weight: Vec<f64>,
     /// Signed curvature of the curve at the pixel's closest point, 1/px.
     pub(crate) curvature: Vec<f64>,

@@ -13,8 +13,9 @@ impl Band {
         self.inside
     }
 
-    /// Each pixel's weight before the window: `1 / (1 - kappa r)` (module
-    /// docs), times any robust factor.
+    /// Each pixel's weight before the window: `1 / (1 - kappa r)` for the
+    /// paper's profiles, 1 for the pushed ones (module docs), times any
+    /// robust factor.
     pub fn full_weights(&self) -> &[f64] {
         &self.full_weight
     }

@@ -1,7 +1,8 @@
 //! The Gauss–Newton system of one reference curve.
 //!
-//! Every sum below runs over the band pixels with the weight
-//! `w = 1 / (1 - kappa r)` of [`Band`] (left out of the formulas).
+//! Every sum below runs over the band pixels with the weight `w` of
+//! [`Band`] (`1 / (1 - kappa r)` for the paper's profiles, 1 for the
+//! pushed ones; left out of the formulas).
 //!
 //! With `g = a + c gamma(r / R)` and the gradient of the physical image `f`
 //! replaced by that of `g`, the normal matrix is `c^2 M0` with

@@ -2,6 +2,7 @@
 //! matched to the edge (the paper's optimum `R_g = R_f`) or the pixel-edge
 //! profile through that blur, whose own blur is then fitted on the band.
 
+use super::blur_offset::{self, Coupling};
 use super::reference::{trim_to_band, Clip, TRIM_MARGIN};
 use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
@@ -162,14 +163,35 @@ pub(super) fn matched_band(e: &psf::EdgeSpread) -> f64 {
 /// When the optimum is at that bracket's end, the caller's next run
 /// brackets again around it.
 pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 {
-    if let Some(blur) = parabolic_refit(corr, lambda, current) {
+    search_blur(&blur_residual(corr, lambda), current)
+}
+
+/// [`fit_blur`], the curve's offset profiled out where the band bends
+/// enough for it to trade off with the blur (`fit/blur_offset.rs`), with
+/// the [`Coupling`] there at the fitted blur.
+pub(super) fn fit_blur_and_offset(
+    corr: &Correlation,
+    lambda: &[f64],
+    current: f64,
+) -> (f64, Option<Coupling>) {
+    if !blur_offset::coupled(corr, current) {
+        return (fit_blur(corr, lambda, current), None);
+    }
+    let blur = search_blur(&blur_offset::profiled_residual(corr, lambda), current);
+    (blur, blur_offset::coupling(corr, lambda, blur, BLUR_PROBE))
+}
+
+/// The blur (pixels) that minimises `ssr` near `current`: the parabola's
+/// vertex when it serves, else the golden-section search (see
+/// [`fit_blur`]).
+fn search_blur(ssr: &impl Fn(f64) -> f64, current: f64) -> f64 {
+    if let Some(blur) = vertex_near(ssr, current) {
         return blur;
     }
-    let ssr = blur_residual(corr, lambda);
     let lo = (0.7 * current - 0.15).max(0.0);
     let hi = 1.3 * current + 0.15;
     // 12 steps: the bracket shrinks to 3e-3 of its width.
-    let best = psf::golden(lo, hi, 12, &ssr);
+    let best = psf::golden(lo, hi, 12, ssr);
     // The bracket's ends are never evaluated: a focused edge's optimum is 0.
     if lo == 0.0 && ssr(0.0) <= ssr(best) {
         0.0
@@ -205,9 +227,14 @@ pub(super) fn blur_residual<'a>(
 /// profile no longer depends on the blur, its residual is flat and the
 /// vertex meaningless: `current` stands there.
 pub(super) fn parabolic_refit(corr: &Correlation, lambda: &[f64], current: f64) -> Option<f64> {
+    vertex_near(&blur_residual(corr, lambda), current)
+}
+
+/// [`parabolic_refit`] of the residual `ssr`.
+fn vertex_near(ssr: &impl Fn(f64) -> f64, current: f64) -> Option<f64> {
     let mid = current.max(BLUR_PROBE);
     let blurs = [mid - BLUR_PROBE, mid, mid + BLUR_PROBE];
-    let variance = parabola_vertex(blurs.map(|b| b * b), blurs.map(blur_residual(corr, lambda)))?;
+    let variance = parabola_vertex(blurs.map(|b| b * b), blurs.map(ssr))?;
     // A focused edge: the residual grows from variance 0 on.
     let blur = variance.max(0.0).sqrt();
     if blur < MIN_BLUR && current < MIN_BLUR {
@@ -218,7 +245,7 @@ pub(super) fn parabolic_refit(corr: &Correlation, lambda: &[f64], current: f64) 
 
 /// The abscissa of the vertex of the parabola through three points of
 /// increasing `x`; `None` unless it opens upwards.
-fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
+pub(super) fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
     let d01 = (y[1] - y[0]) / (x[1] - x[0]);
     let d12 = (y[2] - y[1]) / (x[2] - x[1]);
     let a = (d12 - d01) / (x[2] - x[0]);

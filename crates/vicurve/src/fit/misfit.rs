@@ -42,10 +42,12 @@
 //! iteration limit), the band's own range across the normal
 //! ([`band_range`]) tells a plateau from an edge instead.
 
+use crate::band::BlurredCurvature;
 use crate::correlation::{Correlation, ResidualBin};
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::virtual_image::pixel_edge::spread_variance;
+use crate::virtual_image::Profile;
 
 /// Length of a residual bin along the reference, pixels.
 const BIN: f64 = 1.0;
@@ -174,10 +176,14 @@ pub(super) struct EdgeCheck<'a> {
     half_width: f64,
     /// The spread's variance `v` of a pixel-edge profile, whose half level
     /// lies `v kappa / 2` off the edge it places (px^2; 0 for the paper's
-    /// profile, whose curve is the half level).
+    /// profile, whose curve is the half level), where the profile's own
+    /// level at the curve is not at hand ([`Self::level_at`]).
     variance: f64,
     /// The noise's standard deviation per pixel, gray levels.
     noise: f64,
+    /// A pixel-edge profile and the reference's curvature averaged over
+    /// its blur, for its own level at the curve ([`Self::level_at`]).
+    level: Option<(Profile, BlurredCurvature)>,
 }
 
 impl<'a> EdgeCheck<'a> {
@@ -193,6 +199,11 @@ impl<'a> EdgeCheck<'a> {
         blur: Option<f64>,
     ) -> Option<Self> {
         let noise = corr.noise_var()?.max(sampler.rounding_variance()).sqrt();
+        let profile = corr.band().profile();
+        let curvature = match profile {
+            Profile::PixelEdge { blur, .. } => BlurredCurvature::new(reference, blur),
+            Profile::PixelLine { .. } | Profile::Paper { .. } => None,
+        };
         Some(EdgeCheck {
             sampler,
             reference,
@@ -200,7 +211,23 @@ impl<'a> EdgeCheck<'a> {
             half_width,
             variance: blur.map_or(0.0, spread_variance),
             noise,
+            level: curvature.map(|table| (profile, table)),
         })
+    }
+
+    /// The profile's own level at the curve (0 to 1 of the contrast) at
+    /// reference parameter `u` whose normal is `normal`: the pixel edge's
+    /// through the reference's curvature averaged over the blur and its
+    /// blurred osculating circle (`virtual_image::pixel_edge::curved_edge`),
+    /// else 1/2 (a straight edge's half level).
+    fn level_at(&self, u: f64, normal: [f64; 2]) -> f64 {
+        match &self.level {
+            Some((profile, table)) => {
+                let curvature = (table.at(u), table.osculating_at(u));
+                profile.eval_at(0.0, self.half_width, normal, curvature).0
+            }
+            None => 0.5,
+        }
     }
 
     /// How far the image's edge lies from the measured point `x0(u) + U
@@ -218,7 +245,12 @@ impl<'a> EdgeCheck<'a> {
             return None;
         }
         let f = self.reference.frame(u);
-        let half = a + 0.5 * c;
+        // The level the profile itself has at the curve: a dot a blur or
+        // so across never reaches its straight edge's half level inside
+        // when its contrast is low, and its level at the edge lies far
+        // from that level's first-order shift `v kappa / 2`.
+        let exact = self.level.is_some();
+        let half = a + self.level_at(u, f.normal) * c;
         let value = |t: f64| {
             let along = displacement + t;
             self.sampler.value(
@@ -232,7 +264,11 @@ impl<'a> EdgeCheck<'a> {
             (Some(p), Some(m)) => (p - m).abs(),
             _ => return Some(0.0),
         };
-        let offset = t - 0.5 * self.variance * f.curvature;
+        let offset = if exact {
+            t
+        } else {
+            t - 0.5 * self.variance * f.curvature
+        };
         let significant = (CROSSING_SIGNIFICANCE * self.noise / slope).max(CROSSING_FLOOR);
         Some(if slope > 0.0 && offset.abs() > significant {
             offset.abs()

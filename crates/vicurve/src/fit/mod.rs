@@ -46,6 +46,7 @@
 
 mod anisotropy;
 mod blur;
+mod blur_offset;
 pub mod breaks;
 mod config;
 mod corner_check;

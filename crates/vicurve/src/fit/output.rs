@@ -3,6 +3,7 @@
 //! and robust weight, and the gray levels along it.
 
 use super::blur::{settle_noise_gain, shortest_element};
+use super::blur_offset::Coupling;
 use super::breaks;
 use super::misfit::{band_range, oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
@@ -48,6 +49,10 @@ pub(super) struct Final {
     /// sample's `sigma` (not a flagged misfit: where along the curve it
     /// lies is not known).
     pub shape_error: Option<f64>,
+    /// How the pixel edge's blur and the curve's offset trade off, where
+    /// they do (`fit/blur_offset.rs`): the blur's uncertainty then adds to
+    /// every sample's noise term.
+    pub coupling: Option<Coupling>,
 }
 
 /// What [`Final::samples`] delivers.
@@ -209,6 +214,10 @@ struct SigmaTerms<'a> {
     reach: usize,
     /// The settles' noise gain on the Gauss–Newton `sigma`.
     gain: f64,
+    /// What the blur's uncertainty adds to every sample's noise term,
+    /// pixels (standard deviation; 0 where the blur and the curve's offset
+    /// do not trade off).
+    blur_sd: f64,
     /// The rounding's floor on the noise, a factor on `sigma`.
     rounding: f64,
     /// The residuals' correlation factor on the noise variance
@@ -328,6 +337,10 @@ impl<'a> SigmaTerms<'a> {
         // steps (`Correlation::estimate_noise`): the Gauss–Newton `sigma`
         // scales as the root of the noise variance.
         let rounding = fin.corr.rounding_gain(sampler);
+        let blur_sd = match (fin.coupling, fin.corr.noise_var()) {
+            (Some(c), Some(v)) => rounding * c.position_sd(v),
+            _ => 0.0,
+        };
         let edge = match fin.profile {
             Profile::PixelEdge { blur, .. } => Some(Some(blur)),
             Profile::Paper {
@@ -343,6 +356,7 @@ impl<'a> SigmaTerms<'a> {
             oscillation,
             reach: ((span / step.max(1e-9)).round() as usize).max(1),
             gain,
+            blur_sd,
             rounding,
             correlation,
             near_corners,
@@ -364,7 +378,7 @@ impl<'a> SigmaTerms<'a> {
     /// reference parameter `u`.
     fn at(&self, i: usize, u: f64) -> (f64, f64) {
         let closed = self.fin.reference.is_closed();
-        let noise = self.gain_at(u) * self.fin.corr.position_sigma(u);
+        let noise = (self.gain_at(u) * self.fin.corr.position_sigma(u)).hypot(self.blur_sd);
         let residual = self.residual.as_ref().map_or(0.0, |r| r.at(u));
         let oscillation = self
             .oscillation

@@ -417,6 +417,11 @@ impl<'s> Schedule<'s> {
                 // within the profile's reach (`shortest_pixel_edge`).
                 let blur = optical_blur(e.sigma);
                 let elements = self.matched_elements(stage, chosen, blur, true);
+                self.min_el = self.min_el.min(resolved_min_elements(
+                    &self.current,
+                    self.config.degree,
+                    blur,
+                ));
                 self.matched_added = true;
                 self.pixel_edge = Some(Profile::pixel_edge(blur));
                 self.stages.push(Stage {
@@ -720,6 +725,31 @@ pub(super) fn min_elements(closed: bool, degree: usize, automatic: bool) -> usiz
         (true, false) => degree + 1,
         (true, true) => (degree + 1).max(MIN_CLOSED_ELEMENTS),
     }
+}
+
+/// Least elements of a closed curve whose pixel-edge stage chooses them
+/// when [`MIN_CLOSED_ELEMENTS`] would be shorter than the blur resolves: an
+/// ellipse's (the displacement's Fourier modes 0 to 2: size, position, the
+/// two axes).
+const MIN_RESOLVED_CLOSED_ELEMENTS: usize = 5;
+
+/// The least element count of the pixel-edge stage under an optical blur
+/// of `blur` pixels on the closed curve `reference`, of degree `degree`:
+/// [`MIN_CLOSED_ELEMENTS`], unless elements that many to the curve would
+/// be shorter than the blur resolves ([`shortest_element`]); then as many
+/// as it resolves, at least [`MIN_RESOLVED_CLOSED_ELEMENTS`] and the
+/// degree's minimum. Why: on a dot a few blurs across (a disc of radius 3
+/// px under a 2.5 px blur), eight elements 2.4 px long follow the noise in
+/// waves the blur hides, and the curvature they give the profile moves
+/// the edge by tenths of a pixel. Open curves: 1.
+fn resolved_min_elements(reference: &SplineCurve, degree: usize, blur: f64) -> usize {
+    if !reference.is_closed() {
+        return 1;
+    }
+    let resolved = (reference.arc_length() / shortest_element(blur)).floor() as usize;
+    resolved
+        .clamp(MIN_RESOLVED_CLOSED_ELEMENTS, MIN_CLOSED_ELEMENTS)
+        .max(degree + 1)
 }
 
 /// The image's gray-level range ([`Sampler::gray_range`], computed once

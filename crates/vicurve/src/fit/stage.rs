@@ -14,7 +14,8 @@
 //! the stage is done, and its result the next stage's reference.
 
 use super::anisotropy::{fit_anisotropy, MAX_ANISOTROPY_FITS};
-use super::blur::{fit_blur, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
+use super::blur::{fit_blur_and_offset, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
+use super::blur_offset::Coupling;
 use super::loops;
 use super::output::Final;
 use super::reference::{
@@ -129,6 +130,9 @@ pub(super) struct StageState {
     blur_confirmed: bool,
     /// Fits of the blur's anisotropy so far.
     anisotropy_fits: usize,
+    /// What the blur's uncertainty adds to the curve's, from its last
+    /// refit where the blur and the curve's offset trade off.
+    coupling: Option<Coupling>,
     /// Once the last stage has chosen its elements, re-runs keep them.
     fixed_elements: Option<usize>,
     /// The shape error of those elements, when the refinement measured one
@@ -259,6 +263,7 @@ impl Schedule<'_> {
             blur_updates: 0,
             blur_confirmed: false,
             anisotropy_fits: 0,
+            coupling: None,
             fixed_elements: None,
             shape_error: None,
             settles: 0,
@@ -985,6 +990,7 @@ impl Schedule<'_> {
             corr,
             lambda,
             shape_error: st.shape_error,
+            coupling: st.coupling,
         });
         Ok(Next::Exit(Flow::Completed))
     }
@@ -1080,7 +1086,11 @@ impl Schedule<'_> {
         if st.blur_updates < MAX_BLUR_UPDATES {
             let fitted = match self.tracked {
                 Some(_) => track::refit_blur(corr, lambda, blur),
-                None => fit_blur(corr, lambda, blur),
+                None => {
+                    let (fitted, coupling) = fit_blur_and_offset(corr, lambda, blur);
+                    st.coupling = coupling;
+                    fitted
+                }
             };
             if (fitted - blur).abs() > BLUR_TOLERANCE {
                 self.pixel_edge = Some(Profile::PixelEdge {
@@ -1095,7 +1105,11 @@ impl Schedule<'_> {
             st.blur_confirmed = true;
             return false;
         }
-        if st.anisotropy_fits >= MAX_ANISOTROPY_FITS {
+        // A dot a few blurs across (the blur and its offset trade off):
+        // its own elongation and an elongated blur give it the same image,
+        // and the curve, held fixed while the blur's shape is fitted, makes
+        // any elongation look like the blur's.
+        if st.anisotropy_fits >= MAX_ANISOTROPY_FITS || st.coupling.is_some() {
             return false;
         }
         st.anisotropy_fits += 1;

@@ -458,7 +458,8 @@ pub struct Parameter {
     /// Value.
     pub value: f64,
     /// Standard deviation from the noise (Gauss–Newton covariance scaled
-    /// by the residual variance); NaN when the parameter is not determined.
+    /// by the residual variance, plus the fitted blur's part where it moves
+    /// the shape); NaN when the parameter is not determined.
     pub sigma: f64,
     /// `px` or `rad`.
     pub unit: &'static str,
@@ -614,9 +615,14 @@ pub fn fit_shape(
     let dof = ev.used.saturating_sub(m).max(1) as f64;
     let s2 = ev.cost / dof;
     let inverse = invert(&ev.h, m);
-    let internal_cov: Vec<f64> = (0..p * p)
+    let mut internal_cov: Vec<f64> = (0..p * p)
         .map(|k| s2 * inverse[(k / p) * m + k % p])
         .collect();
+    // The fitted blur's uncertainty moves the shape too (a dot a blur or
+    // so across trades its size for the blur).
+    if let Some(coupling) = &solved.blur_coupling {
+        coupling.add_to(&mut internal_cov, s2);
+    }
     let (parameters, cov) = solved.geom.report(&internal_cov);
     let q = parameters.len();
     Ok(ModelFit {

@@ -62,6 +62,10 @@ const BLUR_REACH: f64 = 3.5;
 /// Tolerance (px) and iterations of the refits of the blur's search.
 const BLUR_FIT_TOLERANCE: f64 = 1e-5;
 const BLUR_FIT_ITERATIONS: usize = 6;
+/// The blur's step either side of the fitted one for [`blur_coupling`],
+/// pixels: wide enough that the refits' tolerance does not show in the
+/// cost's second difference, narrow enough for its curvature.
+const COUPLING_STEP: f64 = 0.05;
 
 /// `(gamma, dgamma/dd)` of the profile at signed distance `d` (the
 /// pixel-edge profile with its curvature shift, and the weight
@@ -418,6 +422,37 @@ pub(crate) struct Solved {
     pub iterations: usize,
     pub passes: usize,
     pub eval: Eval,
+    /// The blur's part in the shape's uncertainty, when the blur was
+    /// fitted ([`blur_coupling`]).
+    pub blur_coupling: Option<BlurCoupling>,
+}
+
+/// How the fitted blur moves the shape: the parameters' change per pixel
+/// of blur (the shape refitted at each blur) and the blur's information,
+/// half the profiled sum of squares' second derivative in the blur.
+pub(crate) struct BlurCoupling {
+    /// `d theta / d blur`, in the geometry's parameter order.
+    pub slope: Vec<f64>,
+    /// Half the second derivative of the cost in the blur (per unit of
+    /// noise variance: the blur's variance is the noise's over this).
+    pub information: f64,
+}
+
+impl BlurCoupling {
+    /// Add the blur's part `v_b slope slope^T` to the row-major `p x p`
+    /// covariance `cov` of the parameters, for the noise variance `s2`.
+    pub fn add_to(&self, cov: &mut [f64], s2: f64) {
+        let p = self.slope.len();
+        if self.information <= 0.0 || cov.len() != p * p {
+            return;
+        }
+        let var = s2 / self.information;
+        for i in 0..p {
+            for j in 0..p {
+                cov[i * p + j] += var * self.slope[i] * self.slope[j];
+            }
+        }
+    }
 }
 
 /// Why [`run`] could not start.
@@ -508,6 +543,16 @@ pub(crate) fn run(
         }
         previous = Some(pixels);
     }
+    // At the blur in use, also where the iterations ran out (the blur was
+    // then not refitted, and is no better known).
+    let blur_coupling = match (profile, config.fit_blur, &previous) {
+        (ModelProfile::PixelEdge { blur }, true, Some(pixels))
+            if !matches!(lm.outcome, Outcome::Diverged { .. }) =>
+        {
+            blur_coupling(&lm, pixels, blur, corners)
+        }
+        _ => None,
+    };
     Ok(Solved {
         geom: lm.geom,
         a: lm.a,
@@ -518,6 +563,69 @@ pub(crate) fn run(
         iterations,
         passes,
         eval: lm.eval,
+        blur_coupling,
+    })
+}
+
+/// The shape and gray levels refitted from `end` on `pixels` under the
+/// pixel edge of blur `blur` (px), a few iterations: every pixel by the
+/// pixel-edge profile and corners left out, so that the sums of the blurs
+/// tried compare the same pixels ([`fit_blur`], [`blur_coupling`]).
+fn refit_at_blur(end: &BandRun, pixels: &[BandPixel], blur: f64, ctx: PixelCtx) -> BandRun {
+    let ctx = PixelCtx {
+        exact: false,
+        exclude_corners: true,
+        ..ctx
+    };
+    levenberg_marquardt(
+        end.geom.clone(),
+        pixels,
+        ModelProfile::PixelEdge { blur },
+        ctx,
+        (end.a, end.c),
+        BLUR_FIT_TOLERANCE,
+        BLUR_FIT_ITERATIONS,
+    )
+}
+
+/// The [`BlurCoupling`] at the fitted `blur` (px): the shape and gray
+/// levels refitted (as [`fit_blur`] does) at `blur` and `blur +-
+/// COUPLING_STEP`; `None` for a blur under two steps (a focused edge,
+/// whose position hardly depends on it) or a cost that does not curve
+/// upwards. Why: a dot a blur or so across looks almost the same as a
+/// larger dot under a smaller blur, so the blur's uncertainty moves its
+/// radius by several times the Gauss–Newton `sigma` at a fixed blur
+/// (docs/benchmarks.md, "Dots a blur or so across").
+fn blur_coupling(
+    end: &BandRun,
+    pixels: &[BandPixel],
+    blur: f64,
+    ctx: PixelCtx,
+) -> Option<BlurCoupling> {
+    if blur < 2.0 * COUPLING_STEP {
+        return None;
+    }
+    let refit = |b: f64| {
+        let run = refit_at_blur(end, pixels, b, ctx);
+        (run.eval.cost, run.geom.params())
+    };
+    let (lo, mid, hi) = (
+        refit(blur - COUPLING_STEP),
+        refit(blur),
+        refit(blur + COUPLING_STEP),
+    );
+    let second = (lo.0 - 2.0 * mid.0 + hi.0) / (COUPLING_STEP * COUPLING_STEP);
+    if !(second > 0.0 && second.is_finite()) {
+        return None;
+    }
+    let slope =
+        lo.1.iter()
+            .zip(&hi.1)
+            .map(|(l, h)| (h - l) / (2.0 * COUPLING_STEP))
+            .collect();
+    Some(BlurCoupling {
+        slope,
+        information: 0.5 * second,
     })
 }
 
@@ -531,25 +639,7 @@ pub(crate) fn run(
 /// pixels: three gray levels, as many unknowns); refitted, every blur fits
 /// equally well there and the smallest, 0, is taken.
 fn fit_blur(end: &BandRun, pixels: &[BandPixel], current: f64, ctx: PixelCtx) -> f64 {
-    // Every pixel by the pixel-edge profile, corners left out, for every
-    // blur tried: the sums compare the same pixels.
-    let ctx = PixelCtx {
-        exact: false,
-        exclude_corners: true,
-        ..ctx
-    };
-    let ssr = |blur: f64| {
-        let run = levenberg_marquardt(
-            end.geom.clone(),
-            pixels,
-            ModelProfile::PixelEdge { blur },
-            ctx,
-            (end.a, end.c),
-            BLUR_FIT_TOLERANCE,
-            BLUR_FIT_ITERATIONS,
-        );
-        run.eval.cost
-    };
+    let ssr = |blur: f64| refit_at_blur(end, pixels, blur, ctx).eval.cost;
     let lo = (0.7 * current - 0.15).max(0.0);
     let hi = 1.3 * current + 0.15;
     let best = crate::psf::golden(lo, hi, 12, ssr);

@@ -172,3 +172,44 @@ fn a_small_disc_under_a_heavy_blur_keeps_its_radius() {
         assert!((fitted - blur).abs() < 0.012, "r {r}: blur {fitted}");
     }
 }
+
+/// Dots a blur or so across (8-bit, noisy): a disc of radius 3 or 4 px
+/// under a 2.5 px blur is nearly a Gaussian bump, and a larger disc under
+/// a smaller blur looks almost the same. The blur and the radius are
+/// measured together (`fit/blur_offset.rs`), on elements no shorter than
+/// the blur resolves, every pixel weighing the same, and the blur's
+/// uncertainty is part of `sigma`. Each dot's radius must lie within 3
+/// `sigma` of the truth, and within 0.35 px (radius 3) or 0.12 px (radius
+/// 4) (before: up to 0.8 px out at 12 `sigma`).
+#[test]
+fn dots_a_blur_across_are_measured_within_their_sigma() {
+    for (r, bound) in [(3.0, 0.35), (4.0, 0.12)] {
+        for seed in 1..=6 {
+            let (cx, cy) = (24.3 + 0.13 * seed as f64, 23.6 - 0.07 * seed as f64);
+            let shape = Shape::Circle { cx, cy, r };
+            let image = render(&spec(shape.clone(), (48, 48), 2.5, 0.005, seed, Some(8))).unwrap();
+            let init = InitialCurve::Circle {
+                cx: cx + 0.6,
+                cy: cy - 0.5,
+                r: r + 0.4,
+            };
+            let m = measure(&image, &init, &FitConfig::default()).unwrap();
+            let e = evaluate(&m.points(), &shape).unwrap();
+            let mut sigmas: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
+            sigmas.sort_by(f64::total_cmp);
+            let sigma = sigmas[sigmas.len() / 2];
+            println!(
+                "r {r} seed {seed}: {} bias {:+.4} sigma {sigma:.4} ({:+.1})",
+                m.outcome,
+                e.bias,
+                e.bias / sigma
+            );
+            assert!(m.outcome.is_converged(), "r {r} seed {seed}: {}", m.outcome);
+            assert!(
+                e.bias.abs() <= 3.0 * sigma && e.bias.abs() < bound,
+                "r {r} seed {seed}: bias {} sigma {sigma}",
+                e.bias
+            );
+        }
+    }
+}

@@ -235,10 +235,12 @@ fn an_encoded_scene_is_read_by_its_objects_together() {
 /// 2 px is the blurred edge's, inside the true one: on `vicurve synth
 /// scene --seed 2 --blur 2` 19 objects of 50, semi-major axes up to 0.18
 /// px small at 63 of their sigma. Here 30 objects 8 px apart, blur 2 and
-/// 3 px, noise 1 %.
+/// 3 px, noise 1 %. Every semi-major axis within 5 of its sigma, and
+/// those whose sigma is under 0.02 px within 0.04 px.
 #[test]
 fn objects_beside_neighbours_keep_the_pixel_edge() {
     use vicurve::virtual_image::Profile;
+    const WELL_MEASURED: f64 = 0.02;
     for blur in [2.0, 3.0] {
         let mut scene = random_scene(640, 480, 30, 0, 0, false, 8.0, 3).unwrap();
         scene.rendering.blur_sigma = blur;
@@ -255,12 +257,17 @@ fn objects_beside_neighbours_keep_the_pixel_edge() {
             );
             // Capped: another edge within the default schedule's reach.
             capped += usize::from(o.region.gap < GAP_REACH as f64 - 1.0);
-            worst = worst.max(err.abs());
+            // The absolute bound where the image fixes the axis: a small
+            // ellipse under the 3 px blur (semi-axes 11 and 6.8 px) has a
+            // sigma of 0.2 px on it.
+            if sd <= WELL_MEASURED {
+                worst = worst.max(err.abs());
+            }
             worst_z = worst_z.max(err.abs() / sd);
         }
         eprintln!(
-            "blur {blur}: {capped} capped; worst semi-major axis error {worst:.4} px, \
-             {worst_z:.2} sigma"
+            "blur {blur}: {capped} capped; worst error of a well-measured semi-major \
+             axis {worst:.4} px; worst {worst_z:.2} sigma"
         );
         assert!(capped > 0, "no object had a close neighbour");
         assert!(worst < 0.04 && worst_z < 5.0, "{worst} {worst_z}");
