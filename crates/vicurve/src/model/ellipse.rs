@@ -16,10 +16,15 @@
 
 use super::geometry::{BoundaryPoint, Grad, Local};
 use super::{ModelShape, Parameter};
+use crate::virtual_image::ellipse::blurred_level_gradient;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// Smallest semi-axis a fit may reach, pixels.
 const MIN_AXIS: f64 = 1.0;
+/// The blur's spread over the smallest radius of curvature from which the
+/// model takes the blurred ellipse's exact level: where the pixel edge's
+/// blurred osculating circle starts (`virtual_image/osculating.rs`).
+const BLURRED_FROM: f64 = 0.1;
 
 /// An ellipse; see the [module docs](self).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,6 +163,37 @@ impl Ellipse {
         }
     }
 
+    /// Whether a blur of spread variance `variance` (px^2) reaches the
+    /// ellipse's sharpest bend: the spread over the smallest radius of
+    /// curvature (`min(a, b)^2 / max(a, b)`) reaches [`BLURRED_FROM`]. The
+    /// pixel-edge profile is an expansion in that ratio; there the model
+    /// takes the blurred ellipse's exact level ([`Self::blurred`]).
+    pub fn bends_under(&self, variance: f64) -> bool {
+        let (long, short) = (self.a.max(self.b), self.a.min(self.b));
+        variance.sqrt() * long / (short * short) >= BLURRED_FROM
+    }
+
+    /// The level the pixel centred at `q` sees of the ellipse under an
+    /// isotropic Gaussian blur of variance `variance` (px^2, the pixel's
+    /// own spread included), exactly (`virtual_image/ellipse.rs`), and its
+    /// derivatives in `[cx, cy, a, b, angle]` (from those in the ellipse's
+    /// frame: `u = x cos - y sin`, `w = -x sin - y cos` of `(x, y) = q -
+    /// centre`).
+    pub fn blurred(&self, q: [f64; 2], variance: f64) -> (f64, Grad) {
+        let (sa, ca) = self.angle.sin_cos();
+        let (x, y) = (q[0] - self.cx, q[1] - self.cy);
+        let (u, w) = (x * ca - y * sa, -x * sa - y * ca);
+        let (level, [du, dw, da, db]) = blurred_level_gradient(u, w, (self.a, self.b), variance);
+        let grad = Grad::from_pairs(&[
+            (0, -du * ca + dw * sa),
+            (1, du * sa + dw * ca),
+            (2, da),
+            (3, db),
+            (4, du * w - dw * u),
+        ]);
+        (level, grad)
+    }
+
     /// The fraction of the pixel centred at `q` inside the ellipse: in the
     /// ellipse's frame scaled to the unit disc the pixel is a parallelogram,
     /// and the area of the disc within a convex polygon is the sum over its
@@ -180,6 +216,12 @@ impl Ellipse {
             let sum: f64 = (0..4).map(|k| disc_triangle(p[k], p[(k + 1) % 4])).sum();
             (e.a * e.b * sum.abs()).clamp(0.0, 1.0)
         };
+        (value(self), self.central_differences(value))
+    }
+
+    /// The derivatives of `value` in `[cx, cy, a, b, angle]` by central
+    /// differences (steps of 1e-5 px; the angle's scaled by the size).
+    fn central_differences(&self, value: impl Fn(&Ellipse) -> f64) -> Grad {
         let theta = self.params();
         let mut grad = Grad::new();
         for (i, h) in [1e-5, 1e-5, 1e-5, 1e-5, 1e-5 / self.a.max(self.b)]
@@ -202,7 +244,7 @@ impl Ellipse {
                 (value(&shifted(1.0)) - value(&shifted(-1.0))) / (2.0 * h),
             );
         }
-        (value(self), grad)
+        grad
     }
 
     /// See [`super::geometry::Geometry::boundary`]: uniform in the
@@ -313,6 +355,29 @@ fn disc_triangle(a: [f64; 2], b: [f64; 2]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The blurred level's derivatives in the parameters match central
+    /// differences of the level.
+    #[test]
+    fn blurred_derivatives_match_differences() {
+        let e = Ellipse {
+            cx: 20.3,
+            cy: 19.6,
+            a: 6.0,
+            b: 3.6,
+            angle: 0.7,
+        };
+        let v = 6.33;
+        for q in [[20.0, 20.0], [25.0, 22.0], [14.5, 17.0], [21.0, 13.0]] {
+            let (_, grad) = e.blurred(q, v);
+            let fd = e.central_differences(|f: &Ellipse| f.blurred(q, v).0);
+            let value = |g: &Grad, i: usize| g.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+            for i in 0..5 {
+                let (g, f) = (value(&grad, i), value(&fd, i));
+                assert!((g - f).abs() < 1e-6, "{q:?} d{i}: {g} vs {f}");
+            }
+        }
+    }
 
     /// Brute force: the distance to a fine polygon of the ellipse.
     fn brute(e: &Ellipse, q: [f64; 2]) -> f64 {

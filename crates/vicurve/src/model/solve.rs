@@ -39,6 +39,7 @@ use super::{CoverageModel, ModelConfig, ModelProfile};
 use crate::measurement::{Divergence, Outcome};
 use crate::solver::lm::{self, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
+use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::Profile;
 use std::f64::consts::FRAC_1_SQRT_2;
 
@@ -109,6 +110,14 @@ fn pixel_model(
             curvature,
             grad,
         } => {
+            // A small ellipse under the blur: its exact blurred level.
+            if let (Geometry::Ellipse(e), ModelProfile::PixelEdge { blur }) = (geom, profile) {
+                let variance = spread_variance(blur);
+                if e.bends_under(variance) {
+                    let (value, grad) = e.blurred(q, variance);
+                    return Some((value, grad, false));
+                }
+            }
             let osculating = match geom {
                 Geometry::Circle(_) => 1.0,
                 _ => 0.0,

@@ -23,6 +23,7 @@
 
 pub mod anisotropy;
 pub mod corner;
+pub(crate) mod ellipse;
 pub(crate) mod osculating;
 pub mod pixel_edge;
 mod polarity;

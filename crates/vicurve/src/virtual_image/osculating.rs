@@ -224,6 +224,14 @@ fn expansion(t: f64, q: f64) -> (f64, f64) {
 
 /// The `n`-point Gauss–Legendre rule on `[0, pi / 2]`: `(node, weight)`.
 fn legendre(n: usize) -> Vec<(f64, f64)> {
+    gauss_legendre(n)
+        .into_iter()
+        .map(|(x, weight)| (FRAC_PI_2 * 0.5 * (x + 1.0), FRAC_PI_2 * 0.5 * weight))
+        .collect()
+}
+
+/// The `n`-point Gauss–Legendre rule on `[-1, 1]`: `(node, weight)`.
+pub(crate) fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
     (0..n)
         .map(|i| {
             // Newton on P_n from the usual first guess.
@@ -242,9 +250,7 @@ fn legendre(n: usize) -> Vec<(f64, f64)> {
                     break;
                 }
             }
-            let weight = 2.0 / ((1.0 - x * x) * dp * dp);
-            // From [-1, 1] to [0, pi / 2].
-            (FRAC_PI_2 * 0.5 * (x + 1.0), FRAC_PI_2 * 0.5 * weight)
+            (x, 2.0 / ((1.0 - x * x) * dp * dp))
         })
         .collect()
 }
