@@ -92,18 +92,19 @@ pub(super) fn coupled(corr: &Correlation, blur: f64) -> bool {
 }
 
 /// The band's residual at `lambda` moved by `offset` (pixels, along the
-/// normals) under the pixel edge of blur `blur`, gray levels refitted,
+/// normals) under the pixel edge `profile` (with the corners' wedge terms
+/// `corner` of its blur, when the band has any), gray levels refitted,
 /// every `stride`-th pixel; each pixel's osculating circle follows the
 /// displacement.
-fn residual_at(corr: &Correlation, lambda: &[f64], offset: f64, blur: f64, stride: usize) -> f64 {
+fn residual_at(
+    corr: &Correlation,
+    lambda: &[f64],
+    offset: f64,
+    (profile, corner): (Profile, Option<&[f64]>),
+    stride: usize,
+) -> f64 {
     let band = corr.band();
-    let anisotropy = match band.profile() {
-        Profile::PixelEdge { anisotropy, .. } => anisotropy,
-        _ => Anisotropy::NONE,
-    };
-    let profile = Profile::PixelEdge { blur, anisotropy };
     let half_width = band.half_width();
-    let corner = band.corner_terms(blur, anisotropy);
     let moved: Vec<f64> = lambda.iter().map(|l| l + offset).collect();
     corr.pushed_ssr_by(&moved, stride, |i, r| {
         let u = band.r[i] - r;
@@ -117,7 +118,7 @@ fn residual_at(corr: &Correlation, lambda: &[f64], offset: f64, blur: f64, strid
         profile
             .eval_at(r, half_width, band.normal[i], (k, band.osculating_at(i)))
             .0
-            + corner.as_ref().map_or(0.0, |c| c[i])
+            + corner.map_or(0.0, |c| c[i])
     })
     .unwrap_or(f64::INFINITY)
 }
@@ -129,8 +130,16 @@ fn residual_at(corr: &Correlation, lambda: &[f64], offset: f64, blur: f64, strid
 /// short of an offset of tenths of a pixel), until it moves by less than
 /// [`OFFSET_SETTLED`] or [`OFFSET_ROUNDS`] parabolas.
 fn profiled_at(corr: &Correlation, lambda: &[f64], blur: f64) -> (f64, f64) {
-    let stride = corr.band().len().div_ceil(super::blur::BLUR_FIT_PIXELS);
-    let at = |offset: f64| residual_at(corr, lambda, offset, blur, stride);
+    let band = corr.band();
+    let stride = band.len().div_ceil(super::blur::BLUR_FIT_PIXELS);
+    let anisotropy = match band.profile() {
+        Profile::PixelEdge { anisotropy, .. } => anisotropy,
+        _ => Anisotropy::NONE,
+    };
+    // The corners' wedge terms depend on the blur, not on the offset.
+    let corner = band.corner_terms(blur, anisotropy);
+    let profile = (Profile::PixelEdge { blur, anisotropy }, corner.as_deref());
+    let at = |offset: f64| residual_at(corr, lambda, offset, profile, stride);
     let mut best = (at(0.0), 0.0);
     for _ in 0..OFFSET_ROUNDS {
         let middle = best.1;
