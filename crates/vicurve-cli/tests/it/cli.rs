@@ -282,7 +282,9 @@ fn bad_inputs_give_one_line_and_a_nonzero_exit() {
         1,
         "polarity",
     );
-    // Initial curve outside the image, band outside the image.
+    // Initial curve outside the image; an open curve along the border,
+    // whose band fits nowhere (a closed curve's band may be cut by the
+    // border).
     assert_error(
         &vicurve(&["measure", &img, "--init", "circle:100,100,150"]),
         1,
@@ -293,9 +295,9 @@ fn bad_inputs_give_one_line_and_a_nonzero_exit() {
             "measure",
             &img,
             "--init",
-            "circle:100,100,60",
+            "segment:0.5,10,0.5,190",
             "--stages",
-            "45:10",
+            "5:10",
         ]),
         1,
         "band",

@@ -262,7 +262,12 @@ impl Band {
             ));
         }
         let reach = params.half_width + params.margin;
-        check_inside(curve, reach, params.width, params.height)?;
+        // A dot or hole near the border: its band is the pixels in the
+        // image (`Band::new`).
+        let clipped = match check_inside(curve, reach, params.width, params.height) {
+            Err(Error::BandOutsideImage { .. }) if curve.is_closed() => true,
+            checked => checked.map(|()| false)?,
+        };
         let blurred_curvature = match params.profile {
             Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {
                 BlurredCurvature::new(curve, blur)
@@ -278,16 +283,18 @@ impl Band {
                 pixels.levelset_rows(&levelsets)
             }
         };
-        Ok(Band::from_rows(rows, params, basis.degree()))
+        Ok(Band::from_rows(rows, params, basis.degree(), clipped))
     }
 
     /// The centre and signed distance `r` (pixels) of every pixel of the
     /// band [`Band::new`] builds (raster order), without the rest of the
     /// band (the basis and profile values at each pixel, its columns): for
     /// what reads only the image across the curve, such as the edge's
-    /// spread ([`crate::psf`]).
+    /// spread ([`crate::psf`]). Unlike [`Band::new`]'s, an open curve's
+    /// band may leave the image too, and the curve with it (an object cut
+    /// by the border): the band is then its pixels in the image.
     ///
-    /// Errors: those of [`Band::new`].
+    /// Errors: an invalid `params`; the level-set coordinates' errors.
     pub(crate) fn distances(
         curve: &SplineCurve,
         basis: &Basis,
@@ -295,7 +302,6 @@ impl Band {
     ) -> Result<Vec<([f64; 2], f64)>> {
         params.check()?;
         let reach = params.half_width + params.margin;
-        check_inside(curve, reach, params.width, params.height)?;
         let pixels = Pixels::asked(curve, basis, params, None);
         let rows = match params.coords {
             Coords::Exact => {
@@ -319,12 +325,13 @@ impl Band {
 
     /// The band of the pixels `rows` (raster order) for a basis of degree
     /// `p`, windowed on its reference.
-    fn from_rows(rows: Vec<Vec<Candidate>>, params: &BandParams, p: usize) -> Band {
+    fn from_rows(rows: Vec<Vec<Candidate>>, params: &BandParams, p: usize, clipped: bool) -> Band {
         let total: usize = rows.iter().map(Vec::len).sum();
         let mut band = Band {
             half_width: params.half_width,
             margin: params.margin,
             inside: 0,
+            clipped,
             profile: params.profile,
             degree: p,
             pos: Vec::with_capacity(total),
@@ -393,9 +400,27 @@ pub(crate) fn check_inside(
     width: usize,
     height: usize,
 ) -> Result<()> {
+    check_curve_inside(curve, width, height)?;
     let domain = Domain::new(width, height, 0.0);
-    let params = check_params(curve, 1.0);
-    for &u in &params {
+    for &u in &check_params(curve, 1.0) {
+        if let Some(q) = band_outside(curve, u, half_width, &domain) {
+            return Err(Error::BandOutsideImage {
+                half_width,
+                x: q[0],
+                y: q[1],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The curve must lie inside the domain of the interpolated image, `[0,
+/// width - 1] x [0, height - 1]`, tested about every pixel.
+///
+/// Errors: [`Error::CurveOutsideImage`] at the first point outside.
+fn check_curve_inside(curve: &SplineCurve, width: usize, height: usize) -> Result<()> {
+    let domain = Domain::new(width, height, 0.0);
+    for &u in &check_params(curve, 1.0) {
         let f = curve.frame(u);
         if !domain.holds(f.point) {
             return Err(Error::CurveOutsideImage {
@@ -403,15 +428,6 @@ pub(crate) fn check_inside(
                 y: f.point[1],
                 width,
                 height,
-            });
-        }
-    }
-    for &u in &params {
-        if let Some(q) = band_outside(curve, u, half_width, &domain) {
-            return Err(Error::BandOutsideImage {
-                half_width,
-                x: q[0],
-                y: q[1],
             });
         }
     }

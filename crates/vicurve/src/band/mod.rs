@@ -124,6 +124,9 @@ pub struct Band {
     /// Pixels within `half_width` of the displaced curve at the last
     /// [`Band::recentre`] (all of them without a margin).
     inside: usize,
+    /// Whether the image border cuts the band (a closed curve near it,
+    /// [`Band::new`]).
+    clipped: bool,
     profile: Profile,
     degree: usize,
     pub(crate) pos: Vec<[f64; 2]>,
@@ -239,11 +242,13 @@ impl Band {
     /// Errors: [`crate::Error::InvalidParameter`] for a half-width under
     /// 0.5 px, a negative or non-finite margin, or a basis whose length
     /// differs from the curve's; [`crate::Error::CurveOutsideImage`] when
-    /// the curve leaves the image; [`crate::Error::BandOutsideImage`] when
-    /// the band (out to `half_width + margin`) does (interpolation needs
-    /// the band inside the pixel centres' hull `[0, width-1] x [0,
-    /// height-1]`); with [`Coords::Levelset`], those of
-    /// [`levelset::LevelsetCoords::build`].
+    /// the curve leaves the image (the pixel centres' hull `[0, width-1] x
+    /// [0, height-1]`); [`crate::Error::BandOutsideImage`] when an open
+    /// curve's band (out to `half_width + margin`) does (an open curve is
+    /// trimmed where its band leaves, `fit`'s reference). A closed curve's
+    /// band may be cut by the border (a dot or a hole near it): it is then
+    /// the band's pixels in the image ([`Band::clipped`]). With
+    /// [`Coords::Levelset`], those of [`levelset::LevelsetCoords::build`].
     pub fn new(curve: &SplineCurve, basis: &Basis, params: &BandParams) -> Result<Band> {
         let mut scratch = BandScratch::from_pool();
         let band = Band::new_in(curve, basis, params, &mut scratch);
@@ -367,6 +372,31 @@ impl Band {
             terms[*i as usize] += w.term_for(blur, anisotropy);
         }
         Some(terms)
+    }
+
+    /// Whether the image border cuts the band: a closed curve near the
+    /// border keeps the band's pixels in the image ([`Band::new`]).
+    pub fn clipped(&self) -> bool {
+        self.clipped
+    }
+
+    /// Whether pixel `i`, displaced by `u` (pixels) out of the image,
+    /// lies beyond a border that cuts the band while the curve's point
+    /// it belongs to, displaced alike, stays where `inside` says the image
+    /// is: not the curve leaving the image, only a pixel the border took.
+    /// Always false for a band that fits in the image.
+    pub(crate) fn cut_by_border(
+        &self,
+        i: usize,
+        u: f64,
+        inside: impl Fn(f64, f64) -> bool,
+    ) -> bool {
+        if !self.clipped {
+            return false;
+        }
+        let ([x, y], [nx, ny]) = (self.pos[i], self.normal[i]);
+        let along = u - self.r[i];
+        inside(x + along * nx, y + along * ny)
     }
 
     /// `U` at pixel `i` for the displacement `lambda` (coefficients in

@@ -70,6 +70,21 @@ impl Pass<'_> {
                     let (xd, yd) = (x + u * nx, y + u * ny);
                     let f = match (sampler.value(xd, yd), levels) {
                         (Some(f), _) => f,
+                        // Beyond a border that cuts the band (a dot near
+                        // it): as fitting exactly, or before any levels
+                        // the image extended by its border; never the
+                        // curve leaving the image.
+                        (None, lv) if band.cut_by_border(i, u, |x, y| sampler.in_domain(x, y)) => {
+                            match (lv, sampler.value_clamped(xd, yd)) {
+                                (Some((a, c)), _) => a + c * band.gamma[i],
+                                (None, Some(f)) => f,
+                                (None, None) => {
+                                    acc.outside = Some([xd, yd]);
+                                    acc.outside_count = usize::MAX / 1024;
+                                    return;
+                                }
+                            }
+                        }
                         // Displaced out of the image (an open curve's end
                         // at the border): taken as fitting exactly, as
                         // long as few pixels are.

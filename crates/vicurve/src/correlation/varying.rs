@@ -399,8 +399,25 @@ impl Varying {
                             let [nx, ny] = band.normal[i];
                             let (xd, yd) = (x + u * nx, y + u * ny);
                             let gamma = band.gamma[i];
+                            let cut = || band.cut_by_border(i, u, |x, y| sampler.in_domain(x, y));
                             match sampler.value(xd, yd) {
                                 Some(f) => (f, gamma),
+                                // Beyond a border that cuts the band: as in
+                                // the global pass.
+                                None if cut() => {
+                                    match (have_theta, sampler.value_clamped(xd, yd)) {
+                                        (true, _) => {
+                                            let (a, c) = lb.levels(i, theta);
+                                            (a + c * gamma, gamma)
+                                        }
+                                        (false, Some(f)) => (f, gamma),
+                                        (false, None) => {
+                                            acc.outside = Some([xd, yd]);
+                                            acc.outside_count = usize::MAX / 1024;
+                                            return;
+                                        }
+                                    }
+                                }
                                 None if have_theta => {
                                     acc.outside.get_or_insert([xd, yd]);
                                     acc.outside_count += 1;

@@ -331,33 +331,9 @@ impl<'s> Schedule<'s> {
             self.sampler.pixel_noise(),
             contrast.map(|(_, c)| c),
             self.sampler.quantum(),
-            self.clear_band_limit().min(self.border_clearance()),
+            self.clear_band_limit(),
         );
         self.capped(band)
-    }
-
-    /// The widest band half-width that keeps the current closed curve's
-    /// band inside the image, pixels (a pixel to spare): a noisy image's
-    /// wide pixel-edge band is narrowed there rather than lost (an object
-    /// 11 px from the border under a 2 px blur was left with the sine
-    /// profile, 0.11 px small). Unbounded for an open curve, which is
-    /// trimmed to its band instead.
-    fn border_clearance(&self) -> f64 {
-        let curve = &self.current;
-        if !curve.is_closed() {
-            return f64::INFINITY;
-        }
-        let (w, h) = (
-            self.sampler.width() as f64 - 1.0,
-            self.sampler.height() as f64 - 1.0,
-        );
-        let length = curve.param_length();
-        let n = (length.ceil() as usize).max(8);
-        let nearest = (0..n)
-            .map(|k| curve.point(k as f64 * length / n as f64))
-            .map(|p| p[0].min(p[1]).min(w - p[0]).min(h - p[1]))
-            .fold(f64::INFINITY, f64::min);
-        nearest - 1.0
     }
 
     /// `half_width` within [`FitConfig::max_half_width`] (pixels, a

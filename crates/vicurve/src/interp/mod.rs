@@ -304,6 +304,13 @@ impl Sampler {
         })
     }
 
+    /// [`Sampler::value`] at the point of the domain nearest `(x, y)`: the
+    /// image extended beyond its border by its border's values. `None` for
+    /// a NaN coordinate.
+    pub fn value_clamped(&self, x: f64, y: f64) -> Option<f64> {
+        self.value(x.clamp(0.0, self.x_max), y.clamp(0.0, self.y_max))
+    }
+
     /// The recorded gray level of the pixel whose centre is `(x, y)`
     /// (integers; the same as [`Sampler::value`] there, which every
     /// interpolation kind reproduces): read from the image's own pixels

@@ -414,9 +414,12 @@ mod tests {
                 sum[2] += w * y * y;
             }
             for k in 0..3 {
-                // The floor: 1e-6 of the trace on the diagonal.
+                // The floor: 1e-6 of the trace on the diagonal. Checked to
+                // 1e-8 of the trace: a singular matrix near a rational
+                // direction takes directions ~200 long, whose weights come
+                // from a cancellation in the form (5e-8 on a trace of 42).
                 let floor = if k == 1 { 0.0 } else { 1e-6 * (m[0] + m[2]) };
-                prop_assert!((sum[k] - m[k] - floor).abs() <= 1e-9 * (1.0 + major), "{m:?} {parts:?}");
+                prop_assert!((sum[k] - m[k] - floor).abs() <= 1e-8 * (1.0 + major), "{m:?} {parts:?}");
             }
         }
     }

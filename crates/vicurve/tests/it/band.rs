@@ -88,19 +88,59 @@ fn pixels_beyond_the_centre_of_curvature_are_left_out() {
     }
 }
 
+/// A closed curve whose band leaves the image keeps the band's pixels in
+/// the image, with the coordinates they have in a band that fits (the same
+/// circle 50 px further from the border of a wider image); a curve that
+/// leaves the image is an error.
 #[test]
-fn curve_or_band_outside_the_image_is_an_error() {
-    let curve = InitialCurve::Circle {
-        cx: 20.0,
-        cy: 50.0,
-        r: 15.0,
-    }
-    .to_curve()
-    .unwrap();
+fn a_band_cut_by_the_border_and_a_curve_outside_the_image() {
+    let circle = |cx: f64| {
+        InitialCurve::Circle {
+            cx,
+            cy: 50.0,
+            r: 15.0,
+        }
+        .to_curve()
+        .unwrap()
+    };
+    let (curve, whole) = (circle(20.0), circle(70.0));
     let basis = Basis::new(3, 8, curve.param_length(), true).unwrap();
-    match Band::build(&curve, &basis, 10.0, Kind::Silhouette, 100, 100) {
-        Err(Error::BandOutsideImage { half_width, .. }) => assert_eq!(half_width, 10.0),
-        other => panic!("expected BandOutsideImage, got {other:?}"),
+    let cut = Band::build(&curve, &basis, 10.0, Kind::Silhouette, 100, 100).unwrap();
+    let fits = Band::build(&whole, &basis, 10.0, Kind::Silhouette, 150, 100).unwrap();
+    assert!(cut.clipped() && !fits.clipped());
+    let mut kept: Vec<([f64; 2], f64, f64)> = fits
+        .positions()
+        .iter()
+        .zip(fits.r())
+        .zip(fits.s())
+        .filter(|((p, _), _)| p[0] >= 50.0)
+        .map(|((p, &r), &s)| ([p[0] - 50.0, p[1]], r, s))
+        .collect();
+    let mut got: Vec<([f64; 2], f64, f64)> = cut
+        .positions()
+        .iter()
+        .zip(cut.r())
+        .zip(cut.s())
+        .map(|((p, &r), &s)| (*p, r, s))
+        .collect();
+    let key = |a: &([f64; 2], f64, f64)| (a.0[1] as i64, a.0[0] as i64);
+    kept.sort_by_key(key);
+    got.sort_by_key(key);
+    assert!(
+        got.len() < fits.len() && got.len() == kept.len(),
+        "{} {}",
+        got.len(),
+        kept.len()
+    );
+    let length = curve.param_length();
+    for (g, k) in got.iter().zip(&kept) {
+        assert_eq!(g.0, k.0);
+        // `s` from the same start, to the closed curve's period.
+        let ds = (g.2 - k.2).abs();
+        assert!(
+            (g.1 - k.1).abs() < 1e-9 && ds.min(length - ds) < 1e-9,
+            "{g:?} {k:?}"
+        );
     }
     let curve = InitialCurve::Circle {
         cx: 10.0,

@@ -469,3 +469,20 @@ fn the_pixel_noise_is_found_beside_an_edge() {
     assert!(noise_of(0.0, None) < 1e-9);
     assert!(noise_of(0.0, Some(8)) < 1e-9);
 }
+
+/// Beyond the border the clamped value is the border's: the image extended
+/// by its border's values.
+#[test]
+fn clamped_values_extend_the_border() {
+    let image = Image::from_fn(5, 4, |x, y| (x * x) as f64 + 0.3 * y as f64);
+    let sampler = Sampler::new(&image, Interpolation::CubicBSpline);
+    for (x, y, at) in [
+        (-2.0, 1.5, (0.0, 1.5)),
+        (7.5, -1.0, (4.0, 0.0)),
+        (2.25, 9.0, (2.25, 3.0)),
+    ] {
+        assert_eq!(sampler.value_clamped(x, y), sampler.value(at.0, at.1));
+    }
+    assert_eq!(sampler.value_clamped(1.0, 1.0), sampler.value(1.0, 1.0));
+    assert_eq!(sampler.value_clamped(f64::NAN, 1.0), None);
+}

@@ -342,11 +342,11 @@ fn a_wavy_line_from_a_straight_start_at_any_phase() {
 }
 
 /// A disc 9 px from the image border, blur 2 px, noise 1 %: the noisy
-/// image's wide pixel-edge band (10.75 px) would leave the image, so it is
-/// narrowed to what the border leaves rather than lost. Before, the stage
-/// was skipped and the curve stayed the sine profile's, the blurred edge
-/// inside the true one: -0.034 px mean here (`vicurve synth disc` of the
-/// same image), 0.11 px on a scene's object at 44 of its sigma.
+/// image's wide pixel-edge band (10.75 px) would leave the image, so the
+/// border cuts it rather than the stage being lost. When the stage was
+/// skipped, the curve stayed the sine profile's, the blurred edge inside
+/// the true one: -0.034 px mean here (`vicurve synth disc` of the same
+/// image), 0.11 px on a scene's object at 44 of its sigma.
 #[test]
 fn a_disc_near_the_border_keeps_its_pixel_edge() {
     use vicurve::virtual_image::Profile;
@@ -367,4 +367,84 @@ fn a_disc_near_the_border_keeps_its_pixel_edge() {
     let bias = evaluate(&m.points(), &shape).unwrap().bias;
     println!("bias {bias:+.4} px, {} stages", m.stages.len());
     assert!(bias.abs() < 0.01, "{bias}");
+}
+
+/// Dots and an ellipse whose edge passes 1 to 6 px from the image border
+/// (a hole near the edge of a plate, a dot at the edge of a grid's crop),
+/// blurred by 2.5 px, from a polyline 0.8 px inside and from the
+/// automatic start.
+/// Their bands (and the 8-px band that measures the blur) are cut by the
+/// border: they keep their pixels in the image, the blur is measured and
+/// the pixel edge takes over. Before, the dots 1 px away were refused
+/// ("the band ... leaves the image") and those 3 to 6 px away kept the
+/// sine profile's curve, up to 0.42 px inside, reported as converged with
+/// a sigma of 0.01 px.
+#[test]
+fn dots_near_the_border_are_measured_with_their_blur() {
+    use vicurve::start::{find_silhouette, StartConfig};
+    use vicurve::virtual_image::Profile;
+    let shapes = |gap: f64| {
+        let r = 10.0;
+        [
+            Shape::Circle {
+                cx: r + gap + 0.3,
+                cy: 32.2,
+                r,
+            },
+            Shape::Ellipse {
+                cx: 32.4,
+                cy: 12.0 + gap + 0.2,
+                a: 18.0,
+                b: 12.0,
+                angle: 0.05,
+            },
+        ]
+    };
+    for gap in [1.0, 3.0, 6.0] {
+        for (k, shape) in shapes(gap).into_iter().enumerate() {
+            let spec =
+                crate::common::spec(shape.clone(), (64, 64), 2.5, 0.005, 7 + k as u64, Some(8));
+            let image = render(&spec).unwrap();
+            // The truth 0.8 px inside, vertices 3 px apart.
+            let mut points: Vec<[f64; 2]> = shape
+                .polyline(3.0)
+                .unwrap()
+                .iter()
+                .map(|p| {
+                    let (_, n) = shape.closest_point(p[0], p[1]);
+                    [p[0] - 0.8 * n[0], p[1] - 0.8 * n[1]]
+                })
+                .collect();
+            points.pop();
+            let inside = InitialCurve::Polyline {
+                points,
+                closed: true,
+            };
+            let auto = find_silhouette(&image, &StartConfig::default())
+                .unwrap()
+                .curve;
+            for (start, init) in [("polyline", inside), ("auto", auto)] {
+                let name = format!("gap {gap} shape {k} {start}");
+                let m = measure(&image, &init, &FitConfig::default()).unwrap();
+                let e = evaluate(&m.points(), &shape).unwrap();
+                let mut sigmas: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
+                sigmas.sort_by(f64::total_cmp);
+                let sigma = sigmas[sigmas.len() / 2];
+                println!(
+                    "{name}: {} bias {:+.4} max {:.4} sigma {sigma:.4}",
+                    m.outcome, e.bias, e.max_abs
+                );
+                assert!(m.outcome.is_converged(), "{name}: {}", m.outcome);
+                let last = m.stages.last().map(|s| s.profile);
+                assert!(
+                    matches!(last, Some(Profile::PixelEdge { .. })),
+                    "{name}: {last:?}"
+                );
+                assert!(
+                    e.bias.abs() < 0.015 && e.max_abs < 5.0 * sigma,
+                    "{name}: {e:?} sigma {sigma}"
+                );
+            }
+        }
+    }
 }
