@@ -358,6 +358,52 @@ pub(super) fn shortest_pixel_edge(reference: &SplineCurve, blur: f64, shortest: 
     }
 }
 
+/// The elements that follow the bends of `reference` under an optical
+/// blur of `blur` pixels: those along which its tangent turns by
+/// [`MAX_ELEMENT_TURN`] at its largest curvature (at least
+/// [`MIN_BEND_ELEMENT`] pixels), where that curvature is within the
+/// profile's reach ([`within_curved_edge_reach`]) and the curve has no
+/// corners nor bends as concentrated as a corner
+/// ([`MAX_BEND_CONCENTRATION`]); `None` elsewhere (a corner, or curvature
+/// beyond the profile).
+/// The pixel-edge stage may refine down to them, below the schedule's
+/// shortest, where the refinement's rule finds the image holds them.
+///
+/// Why: on a small ellipse the 8 elements a closed curve starts with turn
+/// by more than a radian at its ends, which they cut by tenths of a pixel
+/// at many times their `sigma`, and the schedule's shortest left the rule
+/// a single step to try (`docs/benchmarks.md`, "Small ellipses as
+/// free-form curves"). A polygon's corners, not yet declared when the
+/// stage starts, look like such bends to the curvature; their curvature
+/// is concentrated where an ellipse's is spread.
+pub(super) fn bend_element(reference: &SplineCurve, blur: f64) -> Option<f64> {
+    if !reference.corners().is_empty() || !within_curved_edge_reach(reference, blur) {
+        return None;
+    }
+    let l = reference.param_length();
+    let n = (l / CURVATURE_STEP).ceil().max(1.0) as usize;
+    let kappas: Vec<f64> = (0..n)
+        .map(|i| reference.frame(i as f64 * l / n as f64).curvature.abs())
+        .collect();
+    let largest = kappas.iter().copied().fold(0.0, f64::max);
+    let mean = kappas.iter().sum::<f64>() / n as f64;
+    (largest > 0.0 && largest <= MAX_BEND_CONCENTRATION * mean)
+        .then(|| (MAX_ELEMENT_TURN / largest).max(MIN_BEND_ELEMENT))
+}
+
+/// The largest turn of the tangent along one element, radians
+/// ([`bend_element`]).
+const MAX_ELEMENT_TURN: f64 = 0.5;
+/// The largest curvature over the mean of its magnitude beyond which a
+/// curve's sharpest bend is a corner not yet declared, not a bend
+/// ([`bend_element`]): about 2 on ellipses of aspect 5:3, 4.8 at 5:2, 7
+/// at 3:1; `0.64 s / rho` on a square of side `s` whose elements round
+/// its corners to a radius `rho` (10 for a side of 85 px rounded to 5
+/// px), 60 on a pentagon of 160 px.
+const MAX_BEND_CONCENTRATION: f64 = 6.0;
+/// The shortest elements a bend asks for, pixels ([`bend_element`]).
+const MIN_BEND_ELEMENT: f64 = 1.5;
+
 /// Whether the curvature of `reference` stays within the reach of the
 /// profile's curved edge under an optical blur of `blur` pixels: `v
 /// kappa^2` at most [`CURVED_EDGE_REACH`] everywhere (`v` =
@@ -522,5 +568,36 @@ mod tests {
         );
         assert_eq!(shortest_pixel_edge(&square, 4.0, 10.0), 10.0);
         assert_eq!(shortest_pixel_edge(&square, 0.0, 5.0), 5.0);
+    }
+
+    /// Elements that turn half a radian at the largest curvature: 1.8 px
+    /// on an ellipse of 10 x 6 px (radius of curvature `b^2 / a` at its
+    /// ends; its spline on elements of 2 px bends 7 % more there); none
+    /// where the blur reaches beyond the profile's curved edge, nor on a
+    /// curve with corners, declared or not.
+    #[test]
+    fn bend_elements_follow_the_largest_curvature() {
+        let (a, b) = (10.0, 6.0);
+        let ellipse = polar(|t: f64| a * b / (b * t.cos()).hypot(a * t.sin()));
+        let h = bend_element(&ellipse, 0.7).unwrap();
+        assert!((h - 0.5 * b * b / a).abs() < 0.15, "{h}");
+        assert_eq!(bend_element(&ellipse, 2.5), None);
+        let star = polar(|t| 140.0 * (1.0 + 0.2 * (6.0 * t).cos()));
+        assert!(bend_element(&star, 1.0).unwrap() > 5.0);
+        // A square whose corners are rounded over a few pixels: its bends
+        // are corners.
+        let square = polar(|t| {
+            let (c, s) = (t.cos().abs(), t.sin().abs());
+            100.0 / (c.powi(40) + s.powi(40)).powf(1.0 / 40.0)
+        });
+        assert_eq!(bend_element(&square, 0.0), None);
+        let points: Vec<[f64; 2]> = (0..40)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::TAU / 40.0;
+                [50.0 + 20.0 * t.cos(), 50.0 + 20.0 * t.sin()]
+            })
+            .collect();
+        let cornered = SplineCurve::fit_with_corners(&points, true, 3, 4.0, &[0, 20]).unwrap();
+        assert_eq!(bend_element(&cornered, 0.7), None);
     }
 }

@@ -6,8 +6,8 @@
 //! frame's band is kept for the next frame.
 
 use super::blur::{
-    estimate_spread, matched_band, pixel_edge_band_for, shortest_element, shortest_pixel_edge,
-    BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
+    bend_element, estimate_spread, matched_band, pixel_edge_band_for, shortest_element,
+    shortest_pixel_edge, BAND_MISMATCH, MIN_EDGE_FIT_QUALITY,
 };
 use super::loops;
 use super::misfit::{PLATEAU_CONTRAST, PLATEAU_NOISE, PLATEAU_SHARE};
@@ -351,13 +351,18 @@ impl<'s> Schedule<'s> {
     /// those, no shorter than the blur resolves ([`shortest_element`]),
     /// refined further when `refined` and `stage` could refine
     /// (below that where the curve's curvature is within the profile's
-    /// reach, [`shortest_pixel_edge`]); fixed otherwise.
+    /// reach, [`shortest_pixel_edge`], and down to elements that follow
+    /// its bends, [`bend_element`]); fixed otherwise.
     fn matched_elements(&self, stage: &Stage, chosen: f64, blur: f64, refined: bool) -> Elements {
         let floor = shortest_element(blur);
+        // Down to elements that follow the curve's bends, where the
+        // profile does (`bend_element`), if the refinement's rule finds
+        // the image holds them.
+        let bends = bend_element(&self.current, blur).unwrap_or(f64::INFINITY);
         match stage.elements {
             Elements::Auto { shortest, .. } if refined => Elements::Auto {
                 longest: chosen.max(floor),
-                shortest: shortest_pixel_edge(&self.current, blur, shortest),
+                shortest: shortest_pixel_edge(&self.current, blur, shortest).min(bends),
             },
             _ => Elements::Length(chosen.max(floor)),
         }
