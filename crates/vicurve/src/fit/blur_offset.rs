@@ -80,15 +80,28 @@ impl Coupling {
 /// the curve's size.
 pub(super) fn coupled(corr: &Correlation, blur: f64) -> bool {
     let band = corr.band();
-    let (mut curvature, mut osculating, mut weight) = (0.0, 0.0, 0.0);
-    for (i, (k, w)) in band.curvature.iter().zip(&band.weight).enumerate() {
-        curvature += w * k;
+    let (mut osculating, mut weight) = (0.0, 0.0);
+    for (i, w) in band.weight.iter().enumerate() {
         osculating += w * band.osculating_at(i);
         weight += w;
     }
-    weight > 0.0
-        && spread_variance(blur).sqrt() * (curvature / weight).abs() >= COUPLED
-        && osculating >= OSCULATING * weight
+    few_blurs_across(corr, blur) && osculating >= OSCULATING * weight
+}
+
+/// Whether the band of `corr` bends enough under its pixel edge of blur
+/// `blur` (pixels) that the object is a few blurs across: its mean
+/// curvature times the spread at least [`COUPLED`] (a dot, a small
+/// ellipse). Its shape and its blur then give the same images in more
+/// than one way: the blur's size trades with the curve's offset
+/// ([`coupled`]), and an elongated blur with the object's own elongation.
+pub(super) fn few_blurs_across(corr: &Correlation, blur: f64) -> bool {
+    let band = corr.band();
+    let (mut curvature, mut weight) = (0.0, 0.0);
+    for (k, w) in band.curvature.iter().zip(&band.weight) {
+        curvature += w * k;
+        weight += w;
+    }
+    weight > 0.0 && spread_variance(blur).sqrt() * (curvature / weight).abs() >= COUPLED
 }
 
 /// The band's residual at `lambda` moved by `offset` (pixels, along the

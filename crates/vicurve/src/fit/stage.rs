@@ -15,7 +15,7 @@
 
 use super::anisotropy::{fit_anisotropy, MAX_ANISOTROPY_FITS};
 use super::blur::{fit_blur_and_offset, BLUR_TOLERANCE, MAX_BLUR_UPDATES};
-use super::blur_offset::Coupling;
+use super::blur_offset::{few_blurs_across, Coupling};
 use super::loops;
 use super::output::Final;
 use super::reference::{
@@ -1105,11 +1105,11 @@ impl Schedule<'_> {
             st.blur_confirmed = true;
             return false;
         }
-        // A dot a few blurs across (the blur and its offset trade off):
-        // its own elongation and an elongated blur give it the same image,
-        // and the curve, held fixed while the blur's shape is fitted, makes
-        // any elongation look like the blur's.
-        if st.anisotropy_fits >= MAX_ANISOTROPY_FITS || st.coupling.is_some() {
+        // An object a few blurs across (a dot, a small ellipse): its own
+        // elongation and an elongated blur give it the same image, and the
+        // curve, held fixed while the blur's shape is fitted, makes any
+        // elongation look like the blur's.
+        if st.anisotropy_fits >= MAX_ANISOTROPY_FITS || few_blurs_across(corr, blur) {
             return false;
         }
         st.anisotropy_fits += 1;

@@ -145,3 +145,37 @@ fn an_astigmatic_pentagon_keeps_its_corners() {
     assert!(!blur_of(&m).1.is_none());
     assert!(max < 0.1, "max {max}");
 }
+
+/// A small ellipse a few blurs across (semi-axes 6 x 3.6 and 10 x 6 px
+/// under a round 2.5 px blur): its own elongation and an elongated blur
+/// give the same image, so its blur's anisotropy is not fitted. Fitted, it
+/// took the ellipse's elongation for astigmatism (`q` up to 0.72 on an
+/// independent rendering, `bench/probes/free_ellipses.py`).
+#[test]
+fn a_small_ellipse_keeps_its_blur_round() {
+    for (a, b) in [(6.0, 3.6), (10.0, 6.0)] {
+        for seed in 1..=3 {
+            let (cx, cy) = (31.4 + 0.1 * seed as f64, 32.3 - 0.07 * seed as f64);
+            let shape = Shape::Ellipse {
+                cx,
+                cy,
+                a,
+                b,
+                angle: 0.5 + 0.3 * seed as f64,
+            };
+            let image = render(&spec(shape, (64, 64), 2.5, 0.005, seed, Some(8))).unwrap();
+            let init = vicurve::curve::InitialCurve::Circle {
+                cx: cx + 0.6,
+                cy: cy - 0.2,
+                r: 0.5 * (a + b),
+            };
+            let m = measure(&image, &init, &FitConfig::default()).unwrap();
+            let (blur, anisotropy) = blur_of(&m);
+            println!(
+                "{a} x {b} seed {seed}: {} blur {blur:.3} {anisotropy:?}",
+                m.outcome
+            );
+            assert_eq!(anisotropy, Anisotropy::NONE, "{a} x {b} seed {seed}");
+        }
+    }
+}
