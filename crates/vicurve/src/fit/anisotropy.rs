@@ -21,10 +21,11 @@
 //! Edge cases: a blur below the pixel's (`blur² < 10 %` of the spread's
 //! variance) leaves nothing to measure; an object a few blurs across (a
 //! dot, a small ellipse: `blur_offset::few_blurs_across`) is not fitted,
-//! its own elongation giving the same image as an elongated blur; a step that would make the blur
-//! negative in some direction is taken to the closest covariance that is
-//! not (zero blur in that direction: a motion blur without other blur);
-//! `None` whenever the residual cannot be evaluated or does not drop.
+//! its own elongation giving the same image as an elongated blur; a step
+//! that would make the blur negative in some direction is taken to the
+//! closest covariance that is not (zero blur in that direction: a motion
+//! blur without other blur); `None` whenever the residual cannot be
+//! evaluated or does not drop.
 
 use crate::correlation::Correlation;
 use crate::solver::DenseCholesky;

@@ -396,10 +396,11 @@ pub(super) fn bend_element(reference: &SplineCurve, blur: f64) -> Option<f64> {
 const MAX_ELEMENT_TURN: f64 = 0.5;
 /// The largest curvature over the mean of its magnitude beyond which a
 /// curve's sharpest bend is a corner not yet declared, not a bend
-/// ([`bend_element`]): about 2 on ellipses of aspect 5:3, 4.8 at 5:2, 7
-/// at 3:1; `0.64 s / rho` on a square of side `s` whose elements round
-/// its corners to a radius `rho` (10 for a side of 85 px rounded to 5
-/// px), 60 on a pentagon of 160 px.
+/// ([`bend_element`]): about 2.3 on ellipses of aspect 5:3, 4.8 at 5:2,
+/// 6.7 at 3:1; about `n s / (2 pi rho)` on a polygon of `n` sides of
+/// length `s` whose elements round its corners to a radius `rho`, so that
+/// a large polygon is a polygon and a small one, rounded by long
+/// elements, may pass.
 const MAX_BEND_CONCENTRATION: f64 = 6.0;
 /// The shortest elements a bend asks for, pixels ([`bend_element`]).
 const MIN_BEND_ELEMENT: f64 = 1.5;
