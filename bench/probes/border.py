@@ -16,13 +16,12 @@ Needs numpy, scipy and imageio (bench/peers/requirements.txt).
 """
 import json
 import os
-import subprocess
 import sys
 
 import imageio.v3 as iio
 import numpy as np
 
-from dots import render
+from dots import measure, render
 
 RADII = (8, 12, 20)
 BLURS = (0.7, 1.5, 2.5)
@@ -41,26 +40,22 @@ def main():
                 name = f"{out}/b{r}-{blur}-{gap}"
                 iio.imwrite(name + ".png", render(cx, cy, r, blur, True, 1))
                 starts = {
-                    "circle": ["--init", f"circle:{cx + 0.6:.3f},{cy - 0.2:.3f},{r + 0.5:.3f}"],
-                    "auto": [],
+                    "circle": f"circle:{cx + 0.6:.3f},{cy - 0.2:.3f},{r + 0.5:.3f}",
+                    "auto": None,
                 }
                 outcomes, errors, ratios, profiles = [], [], [], set()
                 for start, init in starts.items():
                     res = f"{name}-{start}"
-                    run = subprocess.run(
-                        [binary, "measure", name + ".png", *init,
-                         "--out", res + ".json", "--points", res + ".csv"],
-                        capture_output=True, text=True,
-                    )
-                    if run.returncode not in (0, 2, 3) or not os.path.exists(res + ".csv"):
+                    result, _ = measure(binary, name + ".png", res, init)
+                    if result is None:
                         outcomes.append("refused")
                         continue
-                    result = json.load(open(res + ".json"))
-                    outcomes.append(result["outcome"]["status"])
-                    profiles.add(result["stages"][-1]["profile"]["type"])
-                    if result["outcome"]["status"] != "converged":
+                    d, outcome = result
+                    outcomes.append(outcome)
+                    stages = json.load(open(res + ".json"))["stages"]
+                    profiles.add(stages[-1]["profile"]["type"])
+                    if outcome != "converged":
                         continue
-                    d = np.genfromtxt(res + ".csv", delimiter=",", names=True)
                     error = np.hypot(d["x"] - cx, d["y"] - cy).mean() - r
                     errors.append(abs(error))
                     ratios.append(abs(error) / np.median(d["sigma"]))

@@ -44,12 +44,15 @@ def render(cx, cy, r, blur, bright, seed):
 
 
 def measure(binary, png, out, init):
-    """Mean radius error and median sigma of one measurement, or None."""
+    """`vicurve measure` of `png` from `init` (an `--init` value; None for
+    the automatic start), its results in `out`.json and `out`.csv:
+    ((samples, outcome), None), or (None, [its last error line]) when it
+    was refused. A diverged fit (exit code 3) still writes its results."""
     args = [binary, "measure", png, "--out", out + ".json", "--points", out + ".csv"]
     if init:
         args += ["--init", init]
     run = subprocess.run(args, capture_output=True, text=True)
-    if run.returncode not in (0, 2) or not os.path.exists(out + ".csv"):
+    if run.returncode not in (0, 3) or not os.path.exists(out + ".csv"):
         return None, run.stderr.strip().splitlines()[-1:] or [""]
     d = np.genfromtxt(out + ".csv", delimiter=",", names=True)
     outcome = json.load(open(out + ".json"))["outcome"]["status"]

@@ -15,14 +15,13 @@ of a sample (px) and the largest |error / sigma| of a sample.
 
 Needs numpy, scipy and imageio (bench/peers/requirements.txt).
 """
-import json
 import os
-import subprocess
 import sys
 
 import imageio.v3 as iio
 import numpy as np
 
+from dots import measure
 from ellipses import render
 
 ELLIPSES = ((6, 3.6), (10, 6), (16, 9.6), (24, 14))
@@ -53,19 +52,12 @@ def main():
                 name = f"{out}/e{a}-{blur}-{seed}"
                 iio.imwrite(name + ".png", render(cx, cy, a, b, angle, blur, seed))
                 circle = f"circle:{cx + 0.6:.3f},{cy - 0.2:.3f},{0.5 * (a + b):.3f}"
-                for start, init in (("circle", ["--init", circle]), ("auto", [])):
-                    res = f"{name}-{start}"
-                    run = subprocess.run(
-                        [binary, "measure", name + ".png", *init,
-                         "--out", res + ".json", "--points", res + ".csv"],
-                        capture_output=True, text=True,
-                    )
-                    if run.returncode not in (0, 2, 3) or not os.path.exists(res + ".csv"):
-                        continue
-                    if json.load(open(res + ".json"))["outcome"]["status"] != "converged":
+                for start, init in (("circle", circle), ("auto", None)):
+                    result, _ = measure(binary, name + ".png", f"{name}-{start}", init)
+                    if result is None or result[1] != "converged":
                         continue
                     converged += 1
-                    d = np.genfromtxt(res + ".csv", delimiter=",", names=True)
+                    d = result[0]
                     e = distance(d["x"], d["y"], cx, cy, a, b, angle)
                     means.append(abs(e.mean()))
                     worst.append(np.abs(e).max())

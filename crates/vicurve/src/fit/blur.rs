@@ -382,11 +382,10 @@ pub(super) fn bend_element(reference: &SplineCurve, blur: f64) -> Option<f64> {
     }
     let l = reference.param_length();
     let n = (l / CURVATURE_STEP).ceil().max(1.0) as usize;
-    let kappas: Vec<f64> = (0..n)
+    let (largest, sum) = (0..n)
         .map(|i| reference.frame(i as f64 * l / n as f64).curvature.abs())
-        .collect();
-    let largest = kappas.iter().copied().fold(0.0, f64::max);
-    let mean = kappas.iter().sum::<f64>() / n as f64;
+        .fold((0.0, 0.0), |(m, s), k| (f64::max(m, k), s + k));
+    let mean = sum / n as f64;
     (largest > 0.0 && largest <= MAX_BEND_CONCENTRATION * mean)
         .then(|| (MAX_ELEMENT_TURN / largest).max(MIN_BEND_ELEMENT))
 }

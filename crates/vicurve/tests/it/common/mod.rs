@@ -72,3 +72,12 @@ pub fn max_gap(a: &Measurement, b: &Measurement) -> f64 {
     }
     worst
 }
+
+/// The median of the samples' `sigma` of `m` (px): the typical sample's
+/// reported uncertainty, which a test compares an error with. NaN without
+/// samples.
+pub fn median_sigma(m: &Measurement) -> f64 {
+    let mut sigmas: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
+    sigmas.sort_by(f64::total_cmp);
+    sigmas.get(sigmas.len() / 2).copied().unwrap_or(f64::NAN)
+}

@@ -195,9 +195,7 @@ fn dots_a_blur_across_are_measured_within_their_sigma() {
             };
             let m = measure(&image, &init, &FitConfig::default()).unwrap();
             let e = evaluate(&m.points(), &shape).unwrap();
-            let mut sigmas: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
-            sigmas.sort_by(f64::total_cmp);
-            let sigma = sigmas[sigmas.len() / 2];
+            let sigma = crate::common::median_sigma(&m);
             println!(
                 "r {r} seed {seed}: {} bias {:+.4} sigma {sigma:.4} ({:+.1})",
                 m.outcome,

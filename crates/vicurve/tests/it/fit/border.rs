@@ -427,9 +427,7 @@ fn dots_near_the_border_are_measured_with_their_blur() {
                 let name = format!("gap {gap} shape {k} {start}");
                 let m = measure(&image, &init, &FitConfig::default()).unwrap();
                 let e = evaluate(&m.points(), &shape).unwrap();
-                let mut sigmas: Vec<f64> = m.samples.iter().map(|s| s.sigma).collect();
-                sigmas.sort_by(f64::total_cmp);
-                let sigma = sigmas[sigmas.len() / 2];
+                let sigma = crate::common::median_sigma(&m);
                 println!(
                     "{name}: {} bias {:+.4} max {:.4} sigma {sigma:.4}",
                     m.outcome, e.bias, e.max_abs
