@@ -43,14 +43,16 @@ def render(cx, cy, r, blur, bright, seed):
     return np.clip(np.round(lo + (hi - lo) * cover + noise), 0, 255).astype(np.uint8)
 
 
-def measure(binary, png, out, init):
+def measure(binary, png, out, init, extra=()):
     """`vicurve measure` of `png` from `init` (an `--init` value; None for
-    the automatic start), its results in `out`.json and `out`.csv:
+    the automatic start) with the `extra` arguments, its results in
+    `out`.json and `out`.csv:
     ((samples, outcome), None), or (None, [its last error line]) when it
     was refused. A diverged fit (exit code 3) still writes its results."""
     args = [binary, "measure", png, "--out", out + ".json", "--points", out + ".csv"]
     if init:
         args += ["--init", init]
+    args += list(extra)
     run = subprocess.run(args, capture_output=True, text=True)
     if run.returncode not in (0, 3) or not os.path.exists(out + ".csv"):
         return None, run.stderr.strip().splitlines()[-1:] or [""]

@@ -38,6 +38,7 @@
 //! (a thin part) or whose patch leaves the image is kept as found (no
 //! test is made); a flat patch (no edge in it) keeps the corner.
 
+use super::corner_round::{self, Rounded};
 use super::Outcome;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
@@ -55,7 +56,7 @@ const PATCH: f64 = 12.0;
 /// variances, and by more than one standard deviation of that difference
 /// under noise: where the image cannot tell the two apart the corner the
 /// turning found stands.
-const TOLERANCE: f64 = 9.0;
+pub(super) const TOLERANCE: f64 = 9.0;
 /// A dropped corner's verdict is ambiguous when the evidence for the
 /// smooth curve is within this many of its noise standard deviations
 /// (`2 sqrt(D)`, `D` the two renderings' squared difference in noise
@@ -66,7 +67,7 @@ const AMBIGUITY: f64 = 2.0;
 const RING_STEP: f64 = 0.25;
 
 /// The image's verdict on one found corner.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct Verdict {
     /// The vertex, pixels.
     pub vertex: [f64; 2],
@@ -76,6 +77,9 @@ pub(super) struct Verdict {
     /// could have made ([`AMBIGUITY`]): the samples near it are then
     /// charged with their distance to the sharp curve ([`cover_dropped`]).
     pub ambiguous: bool,
+    /// A kept corner the image shows rounded by a fillet
+    /// ([`super::corner_round`]).
+    pub rounded: Option<Rounded>,
 }
 
 /// The image's verdict on each corner of `cornered` (a measurement with
@@ -101,23 +105,25 @@ pub(super) fn verdicts(
         .iter()
         .map(|&u| {
             let vertex = curve.point(u);
-            let kept = Verdict {
+            let kept = || Verdict {
                 vertex,
                 keep: true,
                 ambiguous: false,
+                rounded: None,
             };
             let Some(patch) = Patch::new(sampler, vertex, blur) else {
-                return kept;
+                return kept();
             };
             let sharp = patch.misfit(curve, u);
             let round = patch.misfit(&smooth.curve, smooth_feet.project(vertex).0);
-            let (Some((sharp, ps)), Some((round, pr))) = (sharp, round) else {
-                return kept;
+            let (Some(sharp), Some((round, pr))) = (sharp, round) else {
+                return kept();
             };
+            let ps = &sharp.1;
             // In noise variances: the evidence for the smooth curve, and
             // how far apart the two renderings are (the evidence's noise
             // has a standard deviation of twice the root of that).
-            let evidence = (sharp - round) / noise;
+            let evidence = (sharp.0 - round) / noise;
             let apart = ps
                 .iter()
                 .zip(&pr)
@@ -125,10 +131,14 @@ pub(super) fn verdicts(
                 .sum::<f64>()
                 / noise;
             let spread = 2.0 * apart.sqrt();
+            let keep = evidence <= TOLERANCE.max(spread);
             Verdict {
                 vertex,
-                keep: evidence <= TOLERANCE.max(spread),
+                keep,
                 ambiguous: evidence <= AMBIGUITY * spread,
+                rounded: keep
+                    .then(|| corner_round::rounded(&patch, curve, u, noise))
+                    .flatten(),
             }
         })
         .collect()
@@ -221,7 +231,7 @@ fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// The image's pixels within the compared radius of a vertex.
-struct Patch {
+pub(super) struct Patch {
     /// Top left pixel.
     x0: usize,
     y0: usize,
@@ -274,12 +284,24 @@ impl Patch {
         })
     }
 
+    /// The radius of the compared disc, pixels.
+    pub(super) fn radius(&self) -> f64 {
+        self.radius
+    }
+
     /// The sum of squared residuals of the image against the region
     /// bounded by `curve` near its parameter `u` (rendered, with a level
     /// and a contrast fitted); `None` when the curve passes within the
     /// patch again away from `u`, or cannot be rendered.
     fn misfit(&self, curve: &SplineCurve, u: f64) -> Option<(f64, Vec<f64>)> {
-        let ring = self.ring(curve, u)?;
+        self.misfit_of(&self.ring(curve, u)?)
+    }
+
+    /// The sum of squared residuals of the image against the region
+    /// bounded by `ring` (a closed polygon from [`Patch::ring`], rendered,
+    /// with a level and a contrast fitted), and the fitted values; `None`
+    /// when it cannot be rendered.
+    pub(super) fn misfit_of(&self, ring: &[[f64; 2]]) -> Option<(f64, Vec<f64>)> {
         let shifted: Vec<[f64; 2]> = ring
             .iter()
             .map(|p| [p[0] - self.x0 as f64, p[1] - self.y0 as f64])
@@ -296,7 +318,7 @@ impl Patch {
     /// patch, closed through a point far off in the wedge between those
     /// continuations. `None` when the curve comes within the patch outside
     /// that stretch.
-    fn ring(&self, curve: &SplineCurve, u: f64) -> Option<Vec<[f64; 2]>> {
+    pub(super) fn ring(&self, curve: &SplineCurve, u: f64) -> Option<Vec<[f64; 2]>> {
         let length = curve.param_length();
         let closed = curve.is_closed();
         // Margin of the rendering beyond the compared disc: the blur's.

@@ -50,6 +50,7 @@ mod blur_offset;
 pub mod breaks;
 mod config;
 mod corner_check;
+mod corner_round;
 mod corner_search;
 mod correlated;
 pub mod grow;
@@ -157,7 +158,9 @@ fn measure_as_linear(
 /// ([`corner_search`]), when it has some and the new result converges
 /// without a residual RMS much above the smooth one's; of a silhouette,
 /// only at the corners the image confirms ([`corner_check`]: measured
-/// once more when it confirms some but not all); else `m`. A smooth
+/// once more when it confirms some but not all), the samples near a kept
+/// corner the image shows rounded charged with the fillet's distance
+/// ([`corner_round`]); else `m`. A smooth
 /// result at its iteration limit is searched too: a spline ringing at a
 /// polygon's corners is one reason a fit does not settle.
 fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> Measurement {
@@ -202,8 +205,12 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
         .filter(|v| v.keep)
         .map(|v| v.vertex)
         .collect();
+    let rounded: Vec<corner_round::Rounded> =
+        verdicts.iter().filter_map(|v| v.rounded.clone()).collect();
     if kept.len() == verdicts.len() {
-        return with_corners_listed(c);
+        let mut c = with_corners_listed(c);
+        corner_round::cover_rounded(&mut c, &rounded);
+        return c;
     }
     let mut chosen = if kept.is_empty() {
         m
@@ -225,6 +232,9 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
         }
     };
     corner_check::cover_dropped(&mut chosen, &c.curve, &verdicts);
+    if !chosen.corners_found.is_empty() {
+        corner_round::cover_rounded(&mut chosen, &rounded);
+    }
     chosen
 }
 

@@ -163,7 +163,7 @@ impl Moments {
 }
 
 /// Centroid and unit principal direction of points (total least squares).
-fn principal(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+pub(crate) fn principal(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
     let n = points.len() as f64;
     let c = points
         .iter()

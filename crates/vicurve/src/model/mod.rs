@@ -64,6 +64,7 @@ mod polygon;
 mod solve;
 
 pub use init::initial_shape;
+pub(crate) use init::principal;
 
 use crate::error::{Error, Result};
 use crate::fit::FitConfig;
