@@ -96,7 +96,7 @@ def main():
                     cx, cy = 63.4 + 0.13 * seed, 47.7 - 0.21 * seed
                     name = f"{out}/p{r}-b{blur}-{int(dark)}-{seed}"
                     iio.imwrite(name + ".png", render(cx, cy, r, blur, dark, seed))
-                    starts = {"auto": None, "clicks": clicks(cx, cy, name + "-clicks.csv")}
+                    starts = {"auto": None, "clicks": clicks(cx, cy, name + "-start.csv")}
                     extra = ["--closed"]
                     for start, init in starts.items():
                         runs += 1

@@ -29,9 +29,11 @@
 //! sharp corner wins by tens to thousands of variances except at 5 %
 //! noise, where the two are within about two deviations either way (the
 //! image can hardly tell them apart); on those rounded rectangles the
-//! smooth curve wins by 12 to 380, about `D`. A corner dropped by less
-//! than [`AMBIGUITY`] deviations leaves `sigma` covering the sharp curve
-//! near it ([`cover_dropped`]).
+//! smooth curve wins by 12 to 380, about `D`. Where the smooth curve
+//! wins by less than [`AMBIGUITY`] deviations the image cannot tell: the
+//! corner goes with the clearly judged corners of the same curve (kept
+//! unless some are clearly dropped and none clearly kept), and `sigma`
+//! near it covers the curve not chosen ([`cover_ambiguous`]).
 //!
 //! Edge cases: only closed and open silhouettes (a line's image is not a
 //! region's); a corner near which the curve passes again within the patch
@@ -54,14 +56,14 @@ const PATCH: f64 = 12.0;
 /// A found corner is kept unless the smooth curve's sum of squared
 /// residuals is below the sharp corner's by more than this many noise
 /// variances, and by more than one standard deviation of that difference
-/// under noise: where the image cannot tell the two apart the corner the
-/// turning found stands.
+/// under noise ([`AMBIGUITY`] for a clear verdict): where the image cannot
+/// tell the two apart the corner the turning found stands.
 pub(super) const TOLERANCE: f64 = 9.0;
-/// A dropped corner's verdict is ambiguous when the evidence for the
-/// smooth curve is within this many of its noise standard deviations
-/// (`2 sqrt(D)`, `D` the two renderings' squared difference in noise
-/// variances): on the conformance pentagons at 5 % noise a true corner's
-/// evidence reached 1.9 of them.
+/// A corner the smooth curve beats by one to this many of the evidence's
+/// noise standard deviations (`2 sqrt(D)`, `D` the two renderings'
+/// squared difference in noise variances) is ambiguous. On the
+/// conformance pentagons at 5 % noise a true corner's evidence reached 1.9
+/// of them, and a sharp rectangle's 2.0 under a 1.5 px blur.
 const AMBIGUITY: f64 = 2.0;
 /// Spacing of the curve's points in the rendered region, pixels.
 const RING_STEP: f64 = 0.25;
@@ -73,9 +75,11 @@ pub(super) struct Verdict {
     pub vertex: [f64; 2],
     /// Whether the corner is kept.
     pub keep: bool,
-    /// Whether a dropped corner was dropped by a margin the image's noise
-    /// could have made ([`AMBIGUITY`]): the samples near it are then
-    /// charged with their distance to the sharp curve ([`cover_dropped`]).
+    /// Whether the smooth curve fitted better by a margin the image's
+    /// noise could have made (between one and [`AMBIGUITY`] deviations):
+    /// the corner is then kept or dropped with the clear ones, and the
+    /// samples near it are charged with their distance to the curve not
+    /// chosen ([`cover_ambiguous`]).
     pub ambiguous: bool,
     /// A kept corner the image shows rounded by a fillet
     /// ([`super::corner_round`]).
@@ -100,7 +104,7 @@ pub(super) fn verdicts(
         .max(f64::MIN_POSITIVE);
     let curve = &cornered.curve;
     let smooth_feet = Feet::new(&smooth.curve);
-    curve
+    let mut verdicts: Vec<Verdict> = curve
         .corners()
         .iter()
         .map(|&u| {
@@ -132,34 +136,42 @@ pub(super) fn verdicts(
                 / noise;
             let spread = 2.0 * apart.sqrt();
             let keep = evidence <= TOLERANCE.max(spread);
+            let ambiguous = keep != (evidence <= TOLERANCE.max(AMBIGUITY * spread));
             Verdict {
                 vertex,
                 keep,
-                ambiguous: evidence <= AMBIGUITY * spread,
-                rounded: keep
+                ambiguous,
+                rounded: (keep || ambiguous)
                     .then(|| corner_round::rounded(&patch, curve, u, noise))
                     .flatten(),
             }
         })
-        .collect()
+        .collect();
+    // An ambiguous corner goes with the clear ones: dropped when some are
+    // clearly dropped and none clearly kept (a part whose fillets are all
+    // alike), else kept.
+    let clear = |keep: bool| verdicts.iter().any(|v| !v.ambiguous && v.keep == keep);
+    let keep_ambiguous = clear(true) || !clear(false);
+    for v in verdicts.iter_mut().filter(|v| v.ambiguous) {
+        v.keep = keep_ambiguous;
+    }
+    for v in verdicts.iter_mut().filter(|v| !v.keep) {
+        v.rounded = None;
+    }
+    verdicts
 }
 
-/// The samples of `m` within [`PATCH`] of a dropped corner whose verdict
-/// was ambiguous, charged with their distance to `sharp` (the measured
-/// curve with that corner) in their model term: the image could not tell
-/// which of the two it holds, and they may differ by most of a pixel at
-/// the vertex (a pentagon under a 2 px blur and 5 % noise: 0.81 px, where
-/// the smooth curve's `sigma` said 0.06).
-pub(super) fn cover_dropped(m: &mut Measurement, sharp: &SplineCurve, verdicts: &[Verdict]) {
-    let near: Vec<[f64; 2]> = verdicts
-        .iter()
-        .filter(|v| !v.keep && v.ambiguous)
-        .map(|v| v.vertex)
-        .collect();
+/// The samples of `m` within [`PATCH`] of the vertices `near` (corners
+/// judged on ambiguous evidence), charged with their distance to `other`
+/// (the measured curve without those corners, or with them) in their
+/// model term: the image could not tell which of the two it holds, and
+/// they may differ by most of a pixel at the vertex (a pentagon under a 2
+/// px blur and 5 % noise: 0.81 px).
+pub(super) fn cover_ambiguous(m: &mut Measurement, other: &SplineCurve, near: &[[f64; 2]]) {
     if near.is_empty() {
         return;
     }
-    let feet = Feet::new(sharp);
+    let feet = Feet::new(other);
     for s in m.samples.iter_mut() {
         let p = [s.x, s.y];
         if !near.iter().any(|&v| dist2(p, v) <= PATCH * PATCH) {

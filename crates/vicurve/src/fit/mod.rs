@@ -160,11 +160,18 @@ fn measure_as_linear(
 /// only at the corners the image confirms ([`corner_check`]: measured
 /// once more when it confirms some but not all), the samples near a kept
 /// corner the image shows rounded charged with the fillet's distance
-/// ([`corner_round`]); else `m`. A smooth
-/// result at its iteration limit is searched too: a spline ringing at a
-/// polygon's corners is one reason a fit does not settle.
+/// ([`corner_round`]); else `m`. A smooth result at its iteration limit,
+/// or diverged off the edge, is searched too: a spline ringing at a
+/// polygon's corners is one reason a fit does not settle or leaves the
+/// edge there.
 fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> Measurement {
-    if matches!(m.outcome, Outcome::Diverged { .. }) {
+    let off_edge = matches!(
+        m.outcome,
+        Outcome::Diverged {
+            divergence: Divergence::OffEdge { .. }
+        }
+    );
+    if matches!(m.outcome, Outcome::Diverged { .. }) && !off_edge {
         return m;
     }
     let closed = m.curve.is_closed();
@@ -196,9 +203,8 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
     if config.kind != Kind::Silhouette {
         return with_corners_listed(c);
     }
-    // The corners the image confirms (`corner_check.rs`); with only some
-    // of them, measured once more with those alone. Near a corner dropped
-    // on ambiguous evidence, `sigma` covers the sharp curve.
+    // The corners the image confirms (`corner_check.rs`); near a corner
+    // kept on ambiguous evidence, `sigma` covers the smooth curve.
     let verdicts = corner_check::verdicts(sampler, &m, &c);
     let kept: Vec<[f64; 2]> = verdicts
         .iter()
@@ -209,34 +215,86 @@ fn with_found_corners(sampler: &Sampler, m: Measurement, config: &FitConfig) -> 
         verdicts.iter().filter_map(|v| v.rounded.clone()).collect();
     if kept.len() == verdicts.len() {
         let mut c = with_corners_listed(c);
+        corner_check::cover_ambiguous(&mut c, &m.curve, &judged(&verdicts, |v| v.ambiguous));
         corner_round::cover_rounded(&mut c, &rounded);
         return c;
     }
-    let mut chosen = if kept.is_empty() {
-        m
+    // Measured again with the kept corners alone, unless that fits worse
+    // than both (its long elements ringing where corners were dropped) or
+    // moves the kept corners; else whichever of the smooth and cornered
+    // measurements fits better. `sigma` near the corners judged otherwise
+    // than the chosen curve shows them covers the other curve.
+    let smooth = m.curve.clone();
+    let sharp = c.curve.clone();
+    let again = if kept.is_empty() {
+        None
     } else {
-        let points = m.points();
-        let with = FitConfig {
-            breaks: kept
-                .iter()
-                .map(|&v| polyline_arc_length(&points, v))
-                .collect(),
-            ..config.clone()
-        };
-        let init = InitialCurve::Polyline { points, closed };
-        match breaks::initial_curve(&init, &with.breaks)
-            .and_then(|start| run_schedule(sampler, start, &with, None))
-        {
-            Ok(r) if matches!(r.outcome, Outcome::Converged) => with_corners_listed(r),
-            _ => m,
-        }
+        with_corners_at(sampler, &m, &kept, config)
+            .filter(|r| residual(r) <= FOUND_CORNERS_GAIN * residual(&m).min(residual(&c)))
     };
-    corner_check::cover_dropped(&mut chosen, &c.curve, &verdicts);
+    let (mut chosen, other, covered) = match again {
+        Some(r) => (r, &smooth, judged(&verdicts, |v| v.ambiguous && v.keep)),
+        None if !kept.is_empty() && residual(&c) < residual(&m) => (
+            with_corners_listed(c),
+            &smooth,
+            judged(&verdicts, |v| v.ambiguous || !v.keep),
+        ),
+        None => (m, &sharp, judged(&verdicts, |v| v.ambiguous || v.keep)),
+    };
+    corner_check::cover_ambiguous(&mut chosen, other, &covered);
     if !chosen.corners_found.is_empty() {
         corner_round::cover_rounded(&mut chosen, &rounded);
     }
     chosen
 }
+
+/// The vertices of the corners whose verdict satisfies `which`.
+fn judged(
+    verdicts: &[corner_check::Verdict],
+    which: impl Fn(&corner_check::Verdict) -> bool,
+) -> Vec<[f64; 2]> {
+    verdicts
+        .iter()
+        .filter(|v| which(v))
+        .map(|v| v.vertex)
+        .collect()
+}
+
+/// `m` measured again with breaks at the vertices `kept` alone, if that
+/// converges with a corner within [`KEPT_CORNER_SHIFT`] of each of them:
+/// a break can slide along a side towards the rounding left where a
+/// corner was dropped.
+fn with_corners_at(
+    sampler: &Sampler,
+    m: &Measurement,
+    kept: &[[f64; 2]],
+    config: &FitConfig,
+) -> Option<Measurement> {
+    let points = m.points();
+    let with = FitConfig {
+        breaks: kept
+            .iter()
+            .map(|&v| polyline_arc_length(&points, v))
+            .collect(),
+        ..config.clone()
+    };
+    let closed = m.curve.is_closed();
+    let init = InitialCurve::Polyline { points, closed };
+    let r = breaks::initial_curve(&init, &with.breaks)
+        .and_then(|start| run_schedule(sampler, start, &with, None))
+        .ok()?;
+    let r = with_corners_listed(r);
+    let stays = kept.iter().all(|&v| {
+        r.corners_found
+            .iter()
+            .any(|&w| crate::curve::dist(v, w) <= KEPT_CORNER_SHIFT)
+    });
+    (matches!(r.outcome, Outcome::Converged) && stays).then_some(r)
+}
+
+/// How far (pixels) a kept corner may move when measured again without
+/// the dropped ones.
+const KEPT_CORNER_SHIFT: f64 = 1.0;
 
 /// `c` with its curve's corners listed as found.
 fn with_corners_listed(mut c: Measurement) -> Measurement {

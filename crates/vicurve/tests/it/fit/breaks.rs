@@ -9,6 +9,7 @@ use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig, Outcome};
 use vicurve::image::Image;
 use vicurve::render::coverage::polygon_coverage;
+use vicurve::start::{find_silhouette, StartConfig};
 
 /// Largest error (px) on the blurred square of
 /// `blurred_square_keeps_its_corners`.
@@ -526,4 +527,58 @@ fn small_fillets_are_charged_in_sigma() {
     );
     assert_eq!(m.outcome, Outcome::Converged);
     assert!(ratio <= 6.0, "max error / sigma {ratio}");
+}
+
+/// A sharp rectangle keeps its four corners and an honest `sigma` at
+/// each: 70 x 40 px, blur 1.5 px, 0.4 % noise, 8 bits, bright and dark,
+/// from the automatic start, at five positions and angles. The smooth
+/// curve near a sharp corner can fit the image as well as the sharp one
+/// (its short elements follow it); a corner then dropped on a margin of
+/// two deviations was measured again without it, and the kept breaks slid
+/// along the sides towards its rounding, or that fit failed and the
+/// smooth curve was kept: 7 to 21 of `sigma` off at a corner, in 6 of the
+/// 10 cases (measured on the same cases). Now each ambiguous corner is
+/// kept, and a remeasurement whose breaks leave their vertices is not
+/// taken (`fit/corner_check.rs`, `fit/mod.rs`).
+#[test]
+fn sharp_rectangles_keep_their_four_corners() {
+    let mut worst = 0.0f64;
+    for seed in [10u64, 11, 15, 26, 30] {
+        let k = seed as f64;
+        let (c, half, angle) = (
+            [63.5 + 0.13 * k, 47.5 - 0.21 * k],
+            [35.0, 20.0],
+            0.3 + 0.05 * k,
+        );
+        let ring = rounded_rectangle(c, half, angle, 1e-6);
+        for dark in [false, true] {
+            let (w, h) = (128, 96);
+            let mut data =
+                vicurve::render::blur::blurred_coverage(w, h, std::slice::from_ref(&ring), 1.5)
+                    .unwrap();
+            let (ground, contrast) = if dark { (0.82, -0.66) } else { (0.16, 0.66) };
+            data.iter_mut().for_each(|v| *v = ground + contrast * *v);
+            vicurve::render::noise::add_gaussian_noise(&mut data, 0.004, seed);
+            vicurve::render::noise::quantise(&mut data, 8);
+            let image = Image::new(w, h, data).unwrap();
+            let start = find_silhouette(&image, &StartConfig::default()).unwrap();
+            let m = measure(&image, &start.curve, &FitConfig::default()).unwrap();
+            let ratio = m
+                .samples
+                .iter()
+                .map(|s| {
+                    rounded_rectangle_distance([s.x, s.y], c, half, angle, 0.0).abs() / s.sigma
+                })
+                .fold(0.0f64, f64::max);
+            println!(
+                "seed {seed}, dark {dark}: {}, {} corners, largest error / sigma {ratio:.1}",
+                m.outcome,
+                m.corners_found.len()
+            );
+            assert_eq!(m.outcome, Outcome::Converged);
+            assert_eq!(m.corners_found.len(), 4, "seed {seed}, dark {dark}");
+            worst = worst.max(ratio);
+        }
+    }
+    assert!(worst <= 5.0, "largest error / sigma {worst}");
 }
