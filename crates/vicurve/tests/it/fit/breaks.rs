@@ -537,9 +537,10 @@ fn small_fillets_are_charged_in_sigma() {
 /// two deviations was measured again without it, and the kept breaks slid
 /// along the sides towards its rounding, or that fit failed and the
 /// smooth curve was kept: 7 to 21 of `sigma` off at a corner, in 6 of the
-/// 10 cases (measured on the same cases). Now each ambiguous corner is
-/// kept, and a remeasurement whose breaks leave their vertices is not
-/// taken (`fit/corner_check.rs`, `fit/mod.rs`).
+/// 10 cases (measured on the same cases). Now an ambiguous corner goes
+/// with the curve's clearly judged ones, and a remeasurement that fits
+/// worse or whose breaks leave their vertices is not taken
+/// (`fit/corner_check.rs`, `fit/mod.rs`).
 #[test]
 fn sharp_rectangles_keep_their_four_corners() {
     let mut worst = 0.0f64;
