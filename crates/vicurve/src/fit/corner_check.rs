@@ -123,18 +123,7 @@ pub(super) fn verdicts(
             let (Some(sharp), Some((round, pr))) = (sharp, round) else {
                 return kept();
             };
-            let ps = &sharp.1;
-            // In noise variances: the evidence for the smooth curve, and
-            // how far apart the two renderings are (the evidence's noise
-            // has a standard deviation of twice the root of that).
-            let evidence = (sharp.0 - round) / noise;
-            let apart = ps
-                .iter()
-                .zip(&pr)
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>()
-                / noise;
-            let spread = 2.0 * apart.sqrt();
+            let (evidence, spread) = compare(&sharp, &(round, pr), noise);
             let keep = evidence <= TOLERANCE.max(spread);
             let ambiguous = keep != (evidence <= TOLERANCE.max(AMBIGUITY * spread));
             Verdict {
@@ -159,6 +148,23 @@ pub(super) fn verdicts(
         v.rounded = None;
     }
     verdicts
+}
+
+/// Two renderings' fits to the same pixels (`(sum of squared residuals,
+/// fitted values)`), in noise variances (`noise`): the evidence for the
+/// second (how much lower its residual sum is), and the standard
+/// deviation of that evidence under noise, `2 sqrt(D)`, `D` the two
+/// renderings' squared difference.
+pub(super) fn compare(first: &(f64, Vec<f64>), second: &(f64, Vec<f64>), noise: f64) -> (f64, f64) {
+    let evidence = (first.0 - second.0) / noise;
+    let apart = first
+        .1
+        .iter()
+        .zip(&second.1)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / noise;
+    (evidence, 2.0 * apart.sqrt())
 }
 
 /// The samples of `m` within [`PATCH`] of the vertices `near` (corners

@@ -36,7 +36,7 @@
 //! larger than its radius, at the noise of the image) is not found, and
 //! the corner's samples keep their `sigma`.
 
-use super::corner_check::{Patch, TOLERANCE};
+use super::corner_check::{compare, Patch, TOLERANCE};
 use crate::curve::SplineCurve;
 use crate::measurement::Measurement;
 
@@ -80,28 +80,25 @@ pub(super) fn rounded(patch: &Patch, curve: &SplineCurve, u: f64, noise: f64) ->
     let vertex = curve.point(u);
     let at = ring.iter().position(|&p| p == vertex)?;
     let sides = Sides::new(&ring, at, patch.radius())?;
-    let outlines = std::iter::once(0.0)
-        .chain(RADII)
-        .take_while(|&rho| rho * sides.half_tan <= sides.reach)
-        .map(|rho| (rho, sides.outline(&ring, rho)));
-    let mut fits = outlines.filter_map(|(rho, ring)| Some((rho, patch.misfit_of(&ring)?, ring)));
-    let (_, sharp, _) = fits.next()?;
-    let (_, (ssr, values), filleted) = fits.min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))?;
-    let evidence = (sharp.0 - ssr) / noise;
-    let apart = sharp
-        .1
+    let sharp = patch.misfit_of(&sides.outline(&ring, 0.0))?;
+    let (filleted, best) = RADII
         .iter()
-        .zip(&values)
-        .map(|(a, b)| (a - b).powi(2))
-        .sum::<f64>()
-        / noise;
+        .take_while(|&&rho| rho * sides.half_tan <= sides.reach)
+        .filter_map(|&rho| {
+            let outline = sides.outline(&ring, rho);
+            let fit = patch.misfit_of(&outline)?;
+            Some((outline, fit))
+        })
+        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))?;
+    let (evidence, spread) = compare(&sharp, &best, noise);
+    let (ssr, values) = best;
     // The fillet must also fit the pixels about as well as their noise
     // allows: where no rendering does (a noiseless image that every
     // rendering misses by far more than its rounding), a fillet can
     // absorb some of the misfit at the vertex without being there.
     let dof = values.len().saturating_sub(2).max(1) as f64;
     let fits_noise = ssr / noise <= MISFIT_RATIO * dof;
-    if !fits_noise || evidence <= TOLERANCE.max(SIGNIFICANCE * 2.0 * apart.sqrt()) {
+    if !fits_noise || evidence <= TOLERANCE.max(SIGNIFICANCE * spread) {
         return None;
     }
     // The filleted curve where it replaced the measured one.
