@@ -258,9 +258,11 @@ pub struct Sample {
     /// Whether the model misfits here: the band's residuals near the
     /// sample ask for a displacement beyond what the noise explains, the
     /// curve oscillates at its elements' scale, the edge bends faster
-    /// than the elements can follow, or a corner found near it was
-    /// dropped on evidence the noise could have made, by more than the
-    /// noise term; `sigma` then covers that misfit.
+    /// than the elements can follow, a corner found near it was dropped on
+    /// evidence the noise could have made, or the blur's curvature shift
+    /// could not be removed (no band matched to the blur fitted in the
+    /// image), by more than the noise term; `sigma` then covers that
+    /// misfit.
     #[serde(default)]
     pub misfit: bool,
     /// Mean robust weight of the last stage's band pixels within about a

@@ -78,15 +78,19 @@ impl Final {
     /// fitted to them and its largest deviation from them, the output
     /// samples at most `spacing` pixels apart with `sigma` (its misfit
     /// term from the band's residuals on the image of `sampler`), and the
-    /// gray levels along the curve when they vary. Never inlined: `vicurve
-    /// bench speed --profile` tells this phase by its frame.
+    /// gray levels along the curve when they vary. `left`: the spread
+    /// (pixels) of a blurred edge whose curvature shift could not be
+    /// removed (the last band too narrow for it): each sample's model term
+    /// then covers that shift, the most the curve can be off by it. Never
+    /// inlined: `vicurve bench speed --profile` tells this phase by its
+    /// frame.
     #[inline(never)]
     pub fn samples(
         &self,
         sampler: &Sampler,
         spacing: f64,
         degree: usize,
-        blur: Option<f64>,
+        (blur, left): (Option<f64>, Option<f64>),
     ) -> Result<Output> {
         // The output samples are points of `x0 + U n` at most `spacing`
         // apart (`output_points`): the points are taken a little closer
@@ -150,6 +154,11 @@ impl Final {
                 // error is spread over the curve: it counts in `sigma`,
                 // not as a local misfit.
                 let model = misfit.max(shape).max(self.shape_error.unwrap_or(0.0));
+                // The blur's curvature shift left in the curve.
+                let unremoved = left.map_or(0.0, |sigma| {
+                    crate::psf::curvature_shift(sigma, f.curvature).abs()
+                });
+                let (model, misfit) = (model.max(unremoved), misfit.max(unremoved));
                 let sample = Sample {
                     s: s[i],
                     x: q[0],

@@ -476,12 +476,17 @@ impl<'s> Schedule<'s> {
         // edge, and stays between the half-level and the boundary). A
         // pixel-edge profile models the shift already.
         let pixel_edge_result = fin.profile.is_pushed();
-        let blur = self
+        let blurred = self
             .edge_spread
             .filter(|_| !pixel_edge_result)
-            .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY)
+            .filter(|e| e.fit_quality >= MIN_EDGE_FIT_QUALITY);
+        let blur = blurred
             .filter(|e| matched_band(e) <= BAND_MISMATCH * fin.half_width)
             .map(|e| e.sigma);
+        // A blurred edge whose shift the band could not remove (the stage
+        // matched to its blur skipped, say near the border): `sigma`
+        // covers the shift.
+        let left = blurred.filter(|_| blur.is_none()).map(|e| e.sigma);
         let Output {
             curve,
             fit_error,
@@ -492,7 +497,7 @@ impl<'s> Schedule<'s> {
             self.sampler,
             self.config.sample_spacing,
             self.config.degree.max(3),
-            blur,
+            (blur, left),
         )?;
         self.check_loops(&samples, curve.is_closed());
         self.check_edge(lost_edge);

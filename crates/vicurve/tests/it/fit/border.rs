@@ -446,3 +446,46 @@ fn dots_near_the_border_are_measured_with_their_blur() {
         }
     }
 }
+
+/// A dot whose edge passes through the first column of pixel centres:
+/// the curve touches the border, the stage matched to the edge's blur
+/// cannot be built, and the narrow band's curve keeps part of the blur's
+/// curvature shift (up to `blur^2 / 2r` inside the disc). Its `sigma` now
+/// covers that shift (`fit/output.rs`): a disc of radius 8, 0.5 % noise,
+/// 8 bits, from a circle 0.6 px off and 0.5 px too large. Under a 2.5 px
+/// blur the samples came out 0.50 px off at up to 51 times their `sigma`
+/// (measured on the same case; now 1.2); under 1.5 px the pixel-edge
+/// stage is reached, before and after (2.2).
+#[test]
+fn a_dot_touching_the_border_covers_its_blur_shift() {
+    let (r, cy) = (8.0, 32.17);
+    let shape = Shape::Circle { cx: r, cy, r };
+    let mut worst = 0.0f64;
+    for (k, blur) in [1.5, 2.5].into_iter().enumerate() {
+        let spec = crate::common::spec(shape.clone(), (64, 64), blur, 0.005, 3 + k as u64, Some(8));
+        let image = render(&spec).unwrap();
+        let init = InitialCurve::Circle {
+            cx: r + 0.6,
+            cy: cy - 0.2,
+            r: r + 0.5,
+        };
+        let m = measure(&image, &init, &FitConfig::default()).unwrap();
+        let (error, ratio) = m
+            .samples
+            .iter()
+            .map(|s| {
+                let e = ((s.x - r).hypot(s.y - cy) - r).abs();
+                (e, e / s.sigma)
+            })
+            .fold((0.0f64, 0.0f64), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+        println!(
+            "blur {blur}: {}, last profile {:?}, largest error {error:.3} px, \
+             largest error / sigma {ratio:.1}",
+            m.outcome,
+            m.stages.last().map(|s| s.profile)
+        );
+        assert_eq!(m.outcome, Outcome::Converged);
+        worst = worst.max(ratio);
+    }
+    assert!(worst <= 3.0, "largest error / sigma {worst}");
+}
