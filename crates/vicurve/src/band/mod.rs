@@ -245,8 +245,7 @@ impl Band {
     /// the curve leaves the image (the pixel centres' hull `[0, width-1] x
     /// [0, height-1]`) farther than 6 px from one of its corners (a
     /// corner's tip cut off by the frame is measured from the sides
-    /// leading to it);
-    /// [`crate::Error::BandOutsideImage`] when an open
+    /// leading to it); [`crate::Error::BandOutsideImage`] when an open
     /// curve's band (out to `half_width + margin`) does (an open curve is
     /// trimmed where its band leaves, `fit`'s reference). A closed curve's
     /// band may be cut by the border (a dot or a hole near it): it is then

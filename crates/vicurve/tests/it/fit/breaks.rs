@@ -585,8 +585,8 @@ fn sharp_rectangles_keep_their_four_corners() {
 }
 
 /// A sharp corner whose tip the frame cuts off is measured from the sides
-/// leading to it (`band/build.rs`: a curve may pass 1.5 px beyond the
-/// pixel centres, farther within 6 px of a corner): the rectangles of
+/// leading to it (`band/build.rs`: within 6 px of a corner a curve may
+/// leave the pixel centres' hull): the rectangles of
 /// [`sharp_rectangles_keep_their_four_corners`] at six positions whose
 /// top vertex lies 0.1 to 0.6 px beyond the pixel centres (automatic
 /// start), and one whose vertex lies 1.5 px beyond them (four clicks in
