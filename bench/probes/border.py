@@ -11,6 +11,11 @@ the largest |radius error| (px), the largest |error / sigma| (the median
 sample sigma) and the last stage's profile.
 
     python bench/probes/border.py target/release/vicurve /tmp/border
+    python bench/probes/border.py target/release/vicurve /tmp/border -0.3,-0.7
+
+An optional third argument gives other gaps (px, comma-separated); a
+negative gap puts the edge beyond the first column of pixel centres
+(-0.3: through it, the disc cut by the border beyond -0.8).
 
 Needs numpy, scipy and imageio (bench/peers/requirements.txt).
 """
@@ -30,12 +35,13 @@ GAPS = (1.0, 3.0, 6.0, 10.0)
 
 def main():
     binary, out = sys.argv[1], sys.argv[2]
+    gaps = tuple(float(g) for g in sys.argv[3].split(",")) if len(sys.argv) > 3 else GAPS
     os.makedirs(out, exist_ok=True)
     print("| radius | blur | gap | outcomes | max abs(error) px | max abs(error / sigma) | last profile |")
     print("|---|---|---|---|---|---|---|")
     for r in RADII:
         for blur in BLURS:
-            for gap in GAPS:
+            for gap in gaps:
                 cx, cy = r + gap + 0.3, 32.17
                 name = f"{out}/b{r}-{blur}-{gap}"
                 iio.imwrite(name + ".png", render(cx, cy, r, blur, True, 1))
