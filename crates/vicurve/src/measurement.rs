@@ -272,6 +272,22 @@ pub struct Sample {
     pub weight: f64,
 }
 
+impl Sample {
+    /// Charge a model misfit of `misfit` pixels: where it exceeds the
+    /// model term `sigma` already holds, `sigma` becomes the noise term
+    /// and `misfit` in quadrature, and the sample is flagged where the
+    /// misfit exceeds the noise term.
+    pub(crate) fn cover(&mut self, misfit: f64) {
+        let model = (self.sigma.powi(2) - self.sigma_noise.powi(2))
+            .max(0.0)
+            .sqrt();
+        if misfit > model {
+            self.sigma = self.sigma_noise.hypot(misfit);
+            self.misfit |= misfit > self.sigma_noise;
+        }
+    }
+}
+
 /// Why an open curve's measurement stops short of the curve it started
 /// from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

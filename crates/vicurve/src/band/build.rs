@@ -435,10 +435,14 @@ const CORNER_TIP: f64 = 6.0;
 /// Errors: [`Error::CurveOutsideImage`] at the first point outside.
 fn check_curve_inside(curve: &SplineCurve, width: usize, height: usize) -> Result<()> {
     let domain = Domain::new(width, height, 0.0);
-    let length = curve.param_length();
-    let tip = CORNER_TIP * length / curve.arc_length().max(f64::MIN_POSITIVE);
+    let (length, corners) = (curve.param_length(), curve.corners());
+    let tip = if corners.is_empty() {
+        0.0
+    } else {
+        CORNER_TIP * length / curve.arc_length().max(f64::MIN_POSITIVE)
+    };
     let near_corner = |u: f64| {
-        curve.corners().iter().any(|&c| {
+        corners.iter().any(|&c| {
             let d = (u - c).abs();
             let d = if curve.is_closed() {
                 d.min(length - d)

@@ -183,12 +183,7 @@ pub(super) fn cover_ambiguous(m: &mut Measurement, other: &SplineCurve, near: &[
         if !near.iter().any(|&v| dist2(p, v) <= PATCH * PATCH) {
             continue;
         }
-        let apart = feet.project(p).1.abs();
-        let model = (s.sigma.powi(2) - s.sigma_noise.powi(2)).max(0.0).sqrt();
-        if apart > model {
-            s.sigma = s.sigma_noise.hypot(apart);
-            s.misfit |= apart > s.sigma_noise;
-        }
+        s.cover(feet.project(p).1.abs());
     }
 }
 

@@ -37,7 +37,7 @@
 //! the corner's samples keep their `sigma`.
 
 use super::corner_check::{compare, Patch, TOLERANCE};
-use crate::curve::SplineCurve;
+use crate::curve::{dist, SplineCurve};
 use crate::measurement::Measurement;
 
 /// Radii of the fillets compared, pixels, each tried while its arc
@@ -261,13 +261,8 @@ pub(super) fn cover_rounded(m: &mut Measurement, rounded: &[Rounded]) {
             if dist([s.x, s.y], r.vertex) > r.reach {
                 continue;
             }
-            let Some(apart) = distance_to(&r.outline, [s.x, s.y]) else {
-                continue;
-            };
-            let model = (s.sigma.powi(2) - s.sigma_noise.powi(2)).max(0.0).sqrt();
-            if apart > model {
-                s.sigma = s.sigma_noise.hypot(apart);
-                s.misfit |= apart > s.sigma_noise;
+            if let Some(apart) = distance_to(&r.outline, [s.x, s.y]) {
+                s.cover(apart);
             }
         }
     }
@@ -289,8 +284,4 @@ fn distance_to(line: &[[f64; 2]], p: [f64; 2]) -> Option<f64> {
             dist(p, [a[0] + t * ab[0], a[1] + t * ab[1]])
         })
         .min_by(f64::total_cmp)
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
