@@ -129,7 +129,8 @@ impl PyMeasurement {
     /// One dict per stage run, with the fields of the result file's
     /// `stages` (half_width, profile, elements, iterations, rereferences,
     /// band_pixels, residual_rms, a, c, seconds, outcome, ...; `binning`
-    /// for a coarse stage run on the binned image).
+    /// for a coarse stage run on the binned image, `whole_object` for a
+    /// small object's last stage measured against its whole image).
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         serde_to_py(py, &self.measurement.stages)

@@ -178,6 +178,14 @@ pub struct StageReport {
     /// result files written before it was recorded).
     #[serde(default)]
     pub history: Vec<IterationRecord>,
+    /// Whether the stage rendered the whole object rather than a band
+    /// profile across the curve: a small closed silhouette under a blur
+    /// large against its curvature, its pixel edge rendered as the whole
+    /// blurred region the curve bounds; `half_width` is then the margin
+    /// of its window around the curve, `band_pixels` the window's pixels.
+    /// Absent from result files when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub whole_object: bool,
 }
 
 /// [`StageReport::binning`] of a stage on the image itself.

@@ -70,6 +70,7 @@ mod settle;
 mod stage;
 mod tone;
 mod track;
+mod whole;
 
 pub use crate::correlation::levels::{self, LevelModel};
 pub use crate::measurement::{
@@ -148,10 +149,14 @@ fn measure_as_linear(
 ) -> Result<Measurement> {
     let smooth_start = config.breaks.is_empty() && reference.corners().is_empty();
     let m = run_schedule(sampler, reference, config, None)?;
-    if !(config.find_corners && smooth_start && config.coords == Coords::Exact) {
-        return Ok(m);
-    }
-    Ok(with_found_corners(sampler, m, config))
+    let m = if config.find_corners && smooth_start && config.coords == Coords::Exact {
+        with_found_corners(sampler, m, config)
+    } else {
+        m
+    };
+    // A small object under a large blur: measured against its whole image
+    // (`whole.rs`).
+    Ok(whole::refined(sampler, m, config.sample_spacing))
 }
 
 /// `m` measured again with breaks at the corners its curve shows

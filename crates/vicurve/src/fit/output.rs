@@ -533,7 +533,7 @@ fn off_edge(samples: &[Sample], offsets: &[f64], span: f64) -> Option<Divergence
 /// the points allow, even where the curve is locally stretched (where a
 /// rule by index, every `k`-th point with `k` from the longest chord,
 /// kept every point of the whole curve).
-fn output_points(s: &[f64], spacing: f64, closing: f64) -> Vec<usize> {
+pub(super) fn output_points(s: &[f64], spacing: f64, closing: f64) -> Vec<usize> {
     let n = s.len();
     let mut kept = Vec::with_capacity(n);
     if n == 0 {

@@ -188,6 +188,7 @@ impl StageState {
             seconds: self.started.elapsed().as_secs_f64(),
             outcome,
             history: std::mem::take(&mut self.history),
+            whole_object: false,
         }
     }
 }

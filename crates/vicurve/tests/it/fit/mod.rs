@@ -25,6 +25,7 @@ mod stage;
 mod tone;
 mod track;
 mod uncertainty;
+mod whole;
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, Elements, FitConfig, Measurement, Outcome, Polarity, Stage};
