@@ -80,7 +80,8 @@ pub struct TrackState {
 }
 
 impl TrackState {
-    /// The state left by a measurement whose last stage is a converged
+    /// The state left by a measurement whose last band stage (the last
+    /// but a whole-object stage, `fit/whole.rs`) is a converged
     /// pixel-edge stage (the default schedule of a silhouette with the blur
     /// correction on, or the tracking schedule), from its stage history and
     /// the length of its curve (pixels) and whether its gray levels vary
@@ -91,7 +92,9 @@ impl TrackState {
         curve_length: f64,
         levels_vary: bool,
     ) -> Option<TrackState> {
-        let last = stages.last()?;
+        // The last band stage: a whole-object stage after it is redone
+        // on each frame after the band stage (`whole.rs`).
+        let last = stages.iter().rev().find(|s| !s.whole_object)?;
         TrackState::from_last_stage(
             last.profile,
             last.elements,
@@ -244,7 +247,9 @@ fn measure_tracked_inner(
     let done = m.outcome == Outcome::Converged
         && m.stages.len() == 1
         && matches!(m.stages[0].profile, Profile::PixelEdge { .. });
-    Ok(done.then_some(m))
+    // A small object under a large blur, as the first frame measured it
+    // (`whole.rs`): else its frames would differ by the profile's bias.
+    Ok(done.then(|| super::whole::refined(sampler, m, config.sample_spacing)))
 }
 
 /// Measure a frame of a sequence: with the tracking schedule when `state`

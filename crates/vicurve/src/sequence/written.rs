@@ -54,9 +54,10 @@ pub fn rebuild(data: &SplineCurveData) -> Result<SplineCurve, String> {
 
 /// What the frame after `m` takes from it for the tracking schedule, `m`'s
 /// curve being `written` as read back ([`rebuild`]); a result file read
-/// back gives the same from its last stage and gray levels.
+/// back gives the same from its last band stage (not a whole-object one)
+/// and gray levels.
 pub fn tracking_state(m: &Measurement, written: &SplineCurve) -> Option<TrackState> {
-    let last = m.stages.last()?;
+    let last = m.stages.iter().rev().find(|s| !s.whole_object)?;
     TrackState::from_last_stage(
         last.profile,
         last.elements,

@@ -67,7 +67,7 @@ pub struct Recorded {
     /// The measured curve (as written).
     pub curve: SplineCurve,
     /// What the next frame's tracking schedule takes from this one
-    /// ([`tracking_state`] of the recorded last stage).
+    /// ([`tracking_state`] of the recorded last band stage).
     pub state: Option<TrackState>,
     /// The band the frame left for the next one (its `sequence.track_band`).
     pub band: Option<TrackSnapshot>,
@@ -86,7 +86,12 @@ pub fn read_recorded(path: &Path, fingerprint: &str, input: &str) -> Option<Reco
     let status = v["outcome"]["status"].as_str()?;
     let data: SplineCurveData = serde_json::from_value(v["curve"].clone()).ok()?;
     let curve = rebuild(&data).ok()?;
-    let last = v["stages"].as_array().and_then(|s| s.last());
+    // The last band stage (a whole-object stage is redone on each frame).
+    let last = v["stages"].as_array().and_then(|s| {
+        s.iter()
+            .rev()
+            .find(|st| !st["whole_object"].as_bool().unwrap_or(false))
+    });
     let state = last.and_then(|last| {
         let profile: Profile = serde_json::from_value(last["profile"].clone()).ok()?;
         let outcome: Outcome = serde_json::from_value(last["outcome"].clone()).ok()?;
