@@ -63,9 +63,11 @@ use crate::virtual_image::Profile;
 /// the whole-object fit on an object that sharp, under a blur near the
 /// pixel's own, did no better.
 const MIN_BLUR_CURVATURE: f64 = 0.4;
-/// ... and where its window holds at most this many pixels (the cost is
-/// the window's pixels times the curve's quadrature points).
-const MAX_PIXELS: usize = 40_000;
+/// ... and where one rendering's work, the window's pixels times the
+/// curve's quadrature points, is at most this (an object of a few
+/// thousand pixels: a 16 x 9.6 px ellipse under a 2.5 px blur is about
+/// 1e6; beyond, the fits would cost far more than the band fit).
+const MAX_WORK: f64 = 5e6;
 /// The window: the pixels inside the curve and within this many spreads
 /// of it (beyond, the blurred edge is within 1.3e-3 of a level).
 const MARGIN_SPREADS: f64 = 3.0;
@@ -184,8 +186,8 @@ struct Pixel {
 impl Start {
     /// The start, when `m` qualifies: converged, closed, no corners, a
     /// silhouette whose last stage is an isotropic pixel edge, blur times
-    /// largest curvature at least [`MIN_BLUR_CURVATURE`], a window of at
-    /// most [`MAX_PIXELS`].
+    /// largest curvature at least [`MIN_BLUR_CURVATURE`], a rendering of
+    /// at most [`MAX_WORK`].
     fn of(sampler: &Sampler, m: &Measurement) -> Option<Start> {
         let last = m.stages.last()?;
         let blur = match last.profile {
@@ -203,10 +205,11 @@ impl Start {
         let margin = MARGIN_SPREADS * spread + MAX_SHIFT;
         let [x0, y0, x1, y1] = curve.bounding_box();
         let area = (x1 - x0 + 2.0 * margin) * (y1 - y0 + 2.0 * margin);
-        if area.is_nan() || area > MAX_PIXELS as f64 {
+        let step = (STEP_SPREADS * spread).min(MAX_STEP);
+        let work = area * 3.0 * curve.arc_length() / step;
+        if work.is_nan() || work > MAX_WORK {
             return None;
         }
-        let step = (STEP_SPREADS * spread).min(MAX_STEP);
         let points = dense_points(curve, step);
         let window = window(sampler, &points, margin);
         // Elements no shorter than the blur resolves along the edge.
