@@ -38,6 +38,8 @@ pub struct Candidate {
     /// Pixels of the regions inside it (its holes and what they hold): its
     /// outer boundary encloses `region.pixels + enclosed` pixels.
     pub enclosed: usize,
+    /// The threshold it was found at (Otsu's), gray levels.
+    pub threshold: f64,
 }
 
 /// What the search found, and what it left out.
@@ -241,6 +243,7 @@ fn number(
                 neighbour: other.and_then(|l| by_label[l as usize]),
                 rect,
                 enclosed: enclosed[*label as usize],
+                threshold: lab.threshold,
             }
         })
         .collect();

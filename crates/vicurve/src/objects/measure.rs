@@ -21,6 +21,11 @@ pub const MIN_GAP: f64 = 6.0;
 /// A band's half-width stays this far (px) inside the gap: the neighbour's
 /// edge reaches about three blur deviations into it.
 const BAND_MARGIN: f64 = 3.0;
+/// The work (pixels times points along the curve) of the rendering
+/// [`expected_pixels`] does at most: a small object's (a dot of radius 10
+/// px under a blur of 2.5 px is about 1e6), never a large one's, whose
+/// thresholded edge a blur moves by a small fraction of its area.
+const MAX_RENDERING: f64 = 2e7;
 /// A model whose residual exceeds the free curve's (or 1 % of the
 /// contrast, whichever is larger) this many times does not fit.
 const MISFIT_RATIO: f64 = 2.0;
@@ -223,18 +228,55 @@ fn diverged(m: &Measurement) -> Option<ObjectFailure> {
 }
 
 /// A closed curve whose area is far from its region's with its holes
-/// (more than one pixel all round: it ran to another edge).
+/// (more than one pixel all round: it ran to another edge). The region is
+/// the image thresholded, whose edge a blur moves off the object's (out
+/// of a small bright dot under a blur of a few pixels, by several pixels
+/// all round): the curve is compared with the region its own image,
+/// rendered through the measured blur and levels ([`expected_pixels`]),
+/// would give at the same threshold.
 fn check_curve(c: &Candidate, m: &Measurement) -> Option<ObjectFailure> {
     let region = (c.region.pixels + c.enclosed) as f64;
-    match m.area() {
-        Some(a) if (a.abs() - region).abs() > c.region.boundary as f64 => {
-            Some(ObjectFailure::Wandered {
-                measured: a.abs(),
-                region,
-            })
-        }
-        _ => None,
+    let area = m.area()?.abs();
+    let off = |expected: f64| (expected - region).abs() > c.region.boundary as f64;
+    // The rendering only where the area alone disagrees.
+    (off(area) && expected_pixels(c, m).is_none_or(off)).then_some(ObjectFailure::Wandered {
+        measured: area,
+        region,
+    })
+}
+
+/// The pixels the measured object's own image (its closed curve rendered
+/// through the blur and gray levels of `m`'s last pixel-edge stage,
+/// `fit::region_light`) puts beyond the threshold `c` was found at, on
+/// the object's side, within its region's box widened by the blur's
+/// reach; `None` without such a stage, or when that rendering would cost
+/// more than [`MAX_RENDERING`].
+fn expected_pixels(c: &Candidate, m: &Measurement) -> Option<f64> {
+    let last = m.stages.last()?;
+    let Profile::PixelEdge { blur, .. } = last.profile else {
+        return None;
+    };
+    let threshold = m.tone.to_linear(c.threshold);
+    let reach = (4.0 * blur).ceil() as usize + 2;
+    let [x0, y0, x1, y1] = c.region.bbox;
+    let origin = [x0.saturating_sub(reach), y0.saturating_sub(reach)];
+    let size = [x1 + reach + 1 - origin[0], y1 + reach + 1 - origin[1]];
+    // Pixels times the rendering's points along the curve (a few per
+    // pixel of its length, more under a small blur).
+    let points = 3.0 * m.length() / (0.3 * blur).clamp(0.1, 0.5);
+    if (size[0] * size[1]) as f64 * points > MAX_RENDERING {
+        return None;
     }
+    let light = crate::fit::region_light(&m.curve, blur, origin, size)?;
+    let inside = |w: &f64| {
+        let g = last.a + last.c * w;
+        if c.bright {
+            g > threshold
+        } else {
+            g < threshold
+        }
+    };
+    Some(light.iter().filter(|w| inside(w)).count() as f64)
 }
 
 /// A diverged model fit, or one whose residual is far above the free

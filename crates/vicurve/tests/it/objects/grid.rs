@@ -95,3 +95,30 @@ fn a_clean_strained_grid_is_measured_to_4e_3_px() {
     assert!(worst < 4e-3, "{worst}");
     assert!(worst_strain < 3e-4, "{worst_strain}");
 }
+
+/// A grid of small dots under a large blur, as a defocused lens records a
+/// printed grid: 3x3 circles of radius 4 px, 24 px apart, blur 2.5 px,
+/// noise 1 %, 8 bits. The thresholded region of such a dot is far larger
+/// than the dot (90 px^2 for 50), and the check that a curve did not run
+/// to another edge compared the curve's area with it: every dot was
+/// refused ("the fit ran to another edge"). It now compares the region
+/// the curve's own blurred image gives at that threshold: every dot is
+/// measured, every sample within 5 of its `sigma` of the circle.
+#[test]
+fn small_blurred_dots_are_not_taken_for_wanderers() {
+    let mut scene = vicurve::render::scene::circle_grid(96, 96, 3, 3, 8.0, false, 5).unwrap();
+    scene.rendering.blur_sigma = 2.5;
+    let image = render_scene(&scene).unwrap();
+    let all = measure_all(&image, &AllConfig::default()).unwrap();
+    assert_eq!(all.objects.len(), 9, "{:?}", all.found);
+    let mut worst = 0.0f64;
+    for (item, o) in scene.items.iter().zip(&all.objects) {
+        assert!(o.failure.is_none(), "object {}: {:?}", o.id, o.failure);
+        let m = o.measurement.as_ref().unwrap();
+        for s in &m.samples {
+            worst = worst.max(item.shape.signed_distance(s.x, s.y).abs() / s.sigma);
+        }
+    }
+    println!("small blurred dots: largest error / sigma {worst:.1}");
+    assert!(worst <= 5.0, "largest error / sigma {worst}");
+}
