@@ -504,6 +504,22 @@ pub(crate) fn shoelace(pts: &[[f64; 2]]) -> f64 {
         .sum()
 }
 
+/// Whether `q` lies inside the closed polygon `pts` (crossing number).
+pub(crate) fn polygon_contains(pts: &[[f64; 2]], q: [f64; 2]) -> bool {
+    let n = pts.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        if (a[1] > q[1]) != (b[1] > q[1]) {
+            let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if q[0] < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
 /// 5-point Gauss–Legendre quadrature of `f` on `[a, b]`.
 fn gauss_legendre(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
     const X: [f64; 5] = [

@@ -85,7 +85,7 @@ pub use track::{
 };
 
 pub(crate) use robust::{clutter_scale, tukey_weight};
-pub(crate) use whole::region_light;
+pub(crate) use whole::{region_light, rendering_work};
 
 use crate::curve::{InitialCurve, SplineCurve};
 use crate::error::Result;

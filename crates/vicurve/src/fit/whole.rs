@@ -48,12 +48,12 @@ use super::output::output_points;
 use super::reference::{chord_lengths, CURVE_SPACING};
 use super::schedule::MIN_CLOSED_ELEMENTS;
 use super::{Measurement, Outcome, Sample, StageReport};
-use crate::curve::SplineCurve;
+use crate::curve::{polygon_contains, SplineCurve};
 use crate::interp::Sampler;
 use crate::measurement::{IterationRecord, RunKind};
 use crate::solver::DenseCholesky;
 use crate::spline::{Basis, MAX_DEGREE};
-use crate::virtual_image::pixel_edge::normal_cdf_pdf;
+use crate::virtual_image::pixel_edge::{normal_cdf_pdf, spread_variance};
 use crate::virtual_image::Profile;
 
 /// The whole object is measured where the blur's spread times the
@@ -132,6 +132,25 @@ pub(super) fn refined(sampler: &Sampler, m: Measurement, spacing: f64) -> Measur
     best.measurement(m, outline, spacing, started.elapsed().as_secs_f64())
 }
 
+/// The whole spread (pixels) of a blur of `blur` px: the optics' and the
+/// pixel's own in quadrature.
+fn spread(blur: f64) -> f64 {
+    spread_variance(blur).sqrt()
+}
+
+/// The quadrature's longest piece along the curve under a blur of `blur`
+/// px, pixels of parameter.
+fn quadrature_step(blur: f64) -> f64 {
+    (STEP_SPREADS * spread(blur)).min(MAX_STEP)
+}
+
+/// The work of one rendering of a closed curve `length` px long under a
+/// blur of `blur` px at `pixels` pixels: pixels times quadrature points
+/// (three on each piece of [`quadrature_step`]).
+pub(crate) fn rendering_work(length: f64, blur: f64, pixels: f64) -> f64 {
+    pixels * 3.0 * length / quadrature_step(blur)
+}
+
 /// The share of each pixel's light that comes from the region `curve`
 /// (closed) bounds, through a Gaussian blur of `blur` px (the rendering of
 /// the module docs), at the centres of the `size[0] x size[1]` pixels
@@ -149,10 +168,8 @@ pub(crate) fn region_light(
     // A blur of 0 leaves the box's edges sharp; a hair of blur keeps the
     // quadrature's integrand smooth, far below a pixel's share of 1e-3.
     let blur = blur.max(0.05);
-    let spread = (blur * blur + 1.0 / 12.0).sqrt();
-    let step = (STEP_SPREADS * spread).min(MAX_STEP);
     let basis = Basis::new(3, MIN_CLOSED_ELEMENTS, curve.param_length(), true).ok()?;
-    let quad = Quadrature::new(curve, &basis, step)?;
+    let quad = Quadrature::new(curve, &basis, quadrature_step(blur))?;
     let window = Window {
         origin,
         size,
@@ -243,18 +260,18 @@ impl Start {
         if m.outcome != Outcome::Converged || !curve.is_closed() || !curve.corners().is_empty() {
             return None;
         }
-        let spread = (blur * blur + 1.0 / 12.0).sqrt();
+        let spread = spread(blur);
         if spread * curve.largest_curvature(0.25) < MIN_BLUR_CURVATURE {
             return None;
         }
         let margin = MARGIN_SPREADS * spread + MAX_SHIFT;
         let [x0, y0, x1, y1] = curve.bounding_box();
         let area = (x1 - x0 + 2.0 * margin) * (y1 - y0 + 2.0 * margin);
-        let step = (STEP_SPREADS * spread).min(MAX_STEP);
-        let work = area * 3.0 * curve.arc_length() / step;
+        let work = rendering_work(curve.arc_length(), blur, area);
         if work.is_nan() || work > MAX_WORK {
             return None;
         }
+        let step = quadrature_step(blur);
         let points = dense_points(curve, step);
         let window = window(sampler, &points, margin);
         // Elements no shorter than the blur resolves along the edge.
@@ -331,12 +348,14 @@ impl<'a> Model<'a> {
         let mut normal = Normal::new(n + 3);
         let mut ssr = self.accumulate(&theta, &mut normal, &mut scratch);
         let mut delta = vec![0.0; n + 3];
+        let mut chol = DenseCholesky::factor(&normal.h, n + 3).ok()?;
         let mut history = Vec::new();
         for iteration in 0..MAX_ITERATIONS {
+            if iteration > 0 {
+                chol.refactor(&normal.h).ok()?;
+            }
             delta.copy_from_slice(&normal.g);
-            DenseCholesky::factor(&normal.h, n + 3)
-                .ok()?
-                .solve_in_place(&mut delta);
+            chol.solve_in_place(&mut delta);
             let step = delta[..n]
                 .iter()
                 .chain(std::iter::once(&delta[n + 2]))
@@ -351,7 +370,7 @@ impl<'a> Model<'a> {
             if step < TOLERANCE {
                 // Converged: the last normal equations are the covariance's.
                 let dof = self.start.window.pixels.len().saturating_sub(n + 3).max(1);
-                let inverse = DenseCholesky::factor(&normal.h, n + 3).ok()?.inverse();
+                let inverse = chol.inverse();
                 return Some(Fit {
                     theta,
                     ssr,
@@ -651,7 +670,7 @@ impl Fit<'_> {
         m.levels.clear();
         m.blur_corrected = true;
         m.stages.push(StageReport {
-            half_width: MARGIN_SPREADS * (blur * blur + 1.0 / 12.0).sqrt(),
+            half_width: MARGIN_SPREADS * spread(blur),
             profile: Profile::pixel_edge(blur),
             elements: self.model.basis.n_elements(),
             iterations: self.history.len(),
@@ -1014,7 +1033,7 @@ fn window(sampler: &Sampler, points: &[[f64; 2]], margin: f64) -> Window {
     for j in j0..=j1 {
         for i in i0..=i1 {
             let (x, y) = (i as f64, j as f64);
-            if !(inside(points, x, y) || near(points, x, y, margin)) {
+            if !(polygon_contains(points, [x, y]) || near(points, x, y, margin)) {
                 continue;
             }
             if let Some(g) = sampler.pixel(i, j) {
@@ -1035,25 +1054,12 @@ fn window(sampler: &Sampler, points: &[[f64; 2]], margin: f64) -> Window {
 
 /// Points of `curve` at most `step` pixels of parameter apart.
 fn dense_points(curve: &SplineCurve, step: f64) -> Vec<[f64; 2]> {
-    let l = curve.param_length();
-    let count = ((l / step).ceil() as usize).max(16);
-    (0..count)
-        .map(|i| curve.point(l * i as f64 / count as f64))
+    let count = ((curve.param_length() / step).ceil() as usize).max(16);
+    curve
+        .sample_params(count)
+        .into_iter()
+        .map(|u| curve.point(u))
         .collect()
-}
-
-/// Whether `(x, y)` lies inside the closed polygon `points` (crossings).
-fn inside(points: &[[f64; 2]], x: f64, y: f64) -> bool {
-    let mut inside = false;
-    let mut j = points.len() - 1;
-    for (i, p) in points.iter().enumerate() {
-        let q = points[j];
-        if (p[1] > y) != (q[1] > y) && x < (q[0] - p[0]) * (y - p[1]) / (q[1] - p[1]) + p[0] {
-            inside = !inside;
-        }
-        j = i;
-    }
-    inside
 }
 
 /// Whether `(x, y)` lies within `margin` of one of `points`.
@@ -1122,7 +1128,7 @@ mod tests {
     fn quadrature(reversed: bool, blur: f64) -> (Basis, Quadrature) {
         let curve = SplineCurve::fit(&ellipse(reversed), true, 3, 0.5).unwrap();
         let basis = Basis::new(3, 10, curve.param_length(), true).unwrap();
-        let step = (STEP_SPREADS * (blur * blur + 1.0 / 12.0).sqrt()).min(MAX_STEP);
+        let step = quadrature_step(blur);
         let quad = Quadrature::new(&curve, &basis, step).unwrap();
         (basis, quad)
     }
@@ -1158,7 +1164,7 @@ mod tests {
             let curve = SplineCurve::fit(&ellipse(false), true, 3, 0.5).unwrap();
             let basis = Basis::new(3, 10, curve.param_length(), true).unwrap();
             let lambda: Vec<f64> = (0..10).map(|j| 0.3 * (j as f64 * 0.7).cos()).collect();
-            let step = (STEP_SPREADS * (blur * blur + 1.0 / 12.0).sqrt()).min(MAX_STEP);
+            let step = quadrature_step(blur);
             let coarse = Quadrature::new(&curve, &basis, step).unwrap();
             let fine = Quadrature::new(&curve, &basis, 0.1 * step).unwrap();
             let window = square(40);

@@ -167,18 +167,7 @@ impl Polygon {
 
     /// Whether `q` is inside (crossing number).
     fn contains(&self, q: [f64; 2]) -> bool {
-        let n = self.v.len();
-        let mut inside = false;
-        for i in 0..n {
-            let (a, b) = (self.v[i], self.v[(i + 1) % n]);
-            if (a[1] > q[1]) != (b[1] > q[1]) {
-                let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-                if q[0] < x {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
+        crate::curve::polygon_contains(&self.v, q)
     }
 
     /// See [`Local`] and the [module docs](self).

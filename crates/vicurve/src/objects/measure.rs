@@ -261,10 +261,8 @@ fn expected_pixels(c: &Candidate, m: &Measurement) -> Option<f64> {
     let [x0, y0, x1, y1] = c.region.bbox;
     let origin = [x0.saturating_sub(reach), y0.saturating_sub(reach)];
     let size = [x1 + reach + 1 - origin[0], y1 + reach + 1 - origin[1]];
-    // Pixels times the rendering's points along the curve (a few per
-    // pixel of its length, more under a small blur).
-    let points = 3.0 * m.length() / (0.3 * blur).clamp(0.1, 0.5);
-    if (size[0] * size[1]) as f64 * points > MAX_RENDERING {
+    let pixels = (size[0] * size[1]) as f64;
+    if crate::fit::rendering_work(m.length(), blur, pixels) > MAX_RENDERING {
         return None;
     }
     let light = crate::fit::region_light(&m.curve, blur, origin, size)?;
