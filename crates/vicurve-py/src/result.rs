@@ -130,7 +130,8 @@ impl PyMeasurement {
     /// `stages` (half_width, profile, elements, iterations, rereferences,
     /// band_pixels, residual_rms, a, c, seconds, outcome, ...; `binning`
     /// for a coarse stage run on the binned image, `whole_object` for a
-    /// small object's last stage measured against its whole image).
+    /// small object's last stage measured against its whole image, with
+    /// the `neighbours` rendered with it).
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         serde_to_py(py, &self.measurement.stages)

@@ -180,12 +180,23 @@ pub struct StageReport {
     pub history: Vec<IterationRecord>,
     /// Whether the stage rendered the whole object rather than a band
     /// profile across the curve: a small closed silhouette under a blur
-    /// large against its curvature, its pixel edge rendered as the whole
-    /// blurred region the curve bounds; `half_width` is then the margin
-    /// of its window around the curve, `band_pixels` the window's pixels.
-    /// Absent from result files when false.
+    /// large against its curvature, or with other objects' light within
+    /// its reach, its pixel edge rendered as the whole blurred region the
+    /// curve bounds; `half_width` is then the margin of its window around
+    /// the curve, `band_pixels` the window's pixels. Absent from result
+    /// files when false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub whole_object: bool,
+    /// The other objects a `whole_object` stage rendered and fitted with
+    /// this one (the dots of a grid around it, whose light reaches its
+    /// window). Absent from result files when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub neighbours: usize,
+}
+
+/// Whether `n` is 0 (serde's test for [`StageReport::neighbours`]).
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// [`StageReport::binning`] of a stage on the image itself.

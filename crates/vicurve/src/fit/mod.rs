@@ -85,6 +85,7 @@ pub use track::{
 };
 
 pub(crate) use robust::{clutter_scale, tukey_weight};
+pub(crate) use schedule::MIN_CAPPED_BAND;
 pub(crate) use whole::{region_light, rendering_work};
 
 use crate::curve::{InitialCurve, SplineCurve};
@@ -156,7 +157,7 @@ fn measure_as_linear(
         m
     };
     // A small object under a large blur: measured against its whole image
-    // (`whole.rs`).
+    // (`whole/`).
     Ok(whole::refined(sampler, m, config.sample_spacing))
 }
 

@@ -40,7 +40,7 @@ const REFINED_LINE_BLUR: f64 = 0.7;
 /// The narrowest band a cap ([`FitConfig::max_half_width`]) leaves a
 /// pixel edge, pixels (and a pixel line beyond each side): the transition
 /// of a focused edge and half a pixel of its levels.
-const MIN_CAPPED_BAND: f64 = 1.5;
+pub(crate) const MIN_CAPPED_BAND: f64 = 1.5;
 
 /// Run the schedule of `config` from `reference`; with `tracked`, the
 /// tracking schedule instead (the pixel-edge stage alone, see

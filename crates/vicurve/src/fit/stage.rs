@@ -189,6 +189,7 @@ impl StageState {
             outcome,
             history: std::mem::take(&mut self.history),
             whole_object: false,
+            neighbours: 0,
         }
     }
 }

@@ -81,7 +81,7 @@ pub struct TrackState {
 
 impl TrackState {
     /// The state left by a measurement whose last band stage (the last
-    /// but a whole-object stage, `fit/whole.rs`) is a converged
+    /// but a whole-object stage, `fit/whole/`) is a converged
     /// pixel-edge stage (the default schedule of a silhouette with the blur
     /// correction on, or the tracking schedule), from its stage history and
     /// the length of its curve (pixels) and whether its gray levels vary
@@ -93,7 +93,7 @@ impl TrackState {
         levels_vary: bool,
     ) -> Option<TrackState> {
         // The last band stage: a whole-object stage after it is redone
-        // on each frame after the band stage (`whole.rs`).
+        // on each frame after the band stage (`whole/`).
         let last = stages.iter().rev().find(|s| !s.whole_object)?;
         TrackState::from_last_stage(
             last.profile,
@@ -248,7 +248,7 @@ fn measure_tracked_inner(
         && m.stages.len() == 1
         && matches!(m.stages[0].profile, Profile::PixelEdge { .. });
     // A small object under a large blur, as the first frame measured it
-    // (`whole.rs`): else its frames would differ by the profile's bias.
+    // (`whole/`): else its frames would differ by the profile's bias.
     Ok(done.then(|| super::whole::refined(sampler, m, config.sample_spacing)))
 }
 

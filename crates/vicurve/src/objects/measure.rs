@@ -66,9 +66,26 @@ pub(crate) fn measure_one(
         base.breaks = super::corners::corner_breaks(points, n).unwrap_or_default();
     }
     let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
-    let fit = capped_config(&c.region, c.neighbour, &base, radius);
+    let capped = capped_config(&c.region, c.neighbour, &base, radius);
+    // Too close for a band of its own: measured on the narrowest band,
+    // kept only if the whole-object fit, which renders the neighbours'
+    // light with the object's, takes over (`fit::whole`).
+    let (fit, close) = match capped {
+        Err(failure @ ObjectFailure::TooClose { .. }) if base.stages.is_none() => {
+            let narrowest = FitConfig {
+                max_half_width: Some(crate::fit::MIN_CAPPED_BAND),
+                ..base
+            };
+            (Ok(narrowest), Some(failure))
+        }
+        other => (other, None),
+    };
     measure_from_start(image, sampler, out, start, fit, config, |m| {
-        check_curve(c, m)
+        let whole = m.stages.last().is_some_and(|s| s.whole_object);
+        match &close {
+            Some(failure) if !whole => Some(failure.clone()),
+            _ => check_curve(c, m),
+        }
     })
 }
 

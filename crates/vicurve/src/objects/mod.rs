@@ -19,7 +19,10 @@
 //! 3. `measure_one` (`measure.rs`): each object's band is kept off its
 //!    neighbours (the stages' half-widths are capped by the gap to the
 //!    nearest other edge: another region of its phase, or one inside it);
-//!    an object too close to another to be
+//!    an object too close for a band of its own is measured on the
+//!    narrowest band and kept only if the whole-object fit, which renders
+//!    its neighbours with it (`fit/whole/`), takes over. An object too
+//!    close to another to be
 //!    measured, a fit that diverges, loops or runs away from its region,
 //!    or a shape model that does not fit, is recorded as failed with its
 //!    reason ([`ObjectFailure`]); the other objects are unaffected.

@@ -81,3 +81,32 @@ pub fn median_sigma(m: &Measurement) -> f64 {
     sigmas.sort_by(f64::total_cmp);
     sigmas.get(sigmas.len() / 2).copied().unwrap_or(f64::NAN)
 }
+
+/// A 3 x 3 grid of dots of radius `r` px, `pitch` px apart, in a 96 x 96
+/// image, the middle one at (48.3, 47.6) off the pixel grid: gray 0.8 on
+/// 0.2, blur `blur` px, 0.6 % noise, 8 bits.
+pub fn dot_grid(r: f64, pitch: f64, blur: f64, seed: u64) -> vicurve::render::scene::Scene {
+    use vicurve::render::scene::{Rendering, Role, Scene, SceneItem};
+    let items = (0..9)
+        .map(|k| SceneItem {
+            shape: Shape::Circle {
+                cx: 48.3 + pitch * (k % 3) as f64 - pitch,
+                cy: 47.6 + pitch * (k / 3) as f64 - pitch,
+                r,
+            },
+            role: Role::Object,
+            strain: None,
+        })
+        .collect();
+    Scene {
+        width: 96,
+        height: 96,
+        items,
+        rendering: Rendering {
+            blur_sigma: blur,
+            noise: 0.006,
+            ..Rendering::standard(seed)
+        },
+        d0: None,
+    }
+}

@@ -1,11 +1,12 @@
 //! Small closed silhouettes under a blur as large as they are, measured
-//! against the image of the whole object (`fit/whole.rs`): ellipses of
+//! against the image of the whole object (`fit/whole/`): ellipses of
 //! semi-axes 6 x 3.6 and 10 x 6 px under blurs of 1.5 and 2.5 px. The
 //! pixel-edge profile's blurred osculating circle is not such an object's
 //! image; its curve came out rounder than the ellipse, up to 0.6 px off
 //! at up to 17 times its `sigma` (bench/probes/free_ellipses.py before
 //! the whole-object fit). Now every sample's error is within a few of
-//! its `sigma`.
+//! its `sigma`. Also a dot of a dense grid, whose neighbours the fit
+//! renders with it (`fit/whole/neighbours.rs`).
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, measure_tracked, FitConfig, Outcome, TrackState};
@@ -118,4 +119,74 @@ fn tracked_frames_of_a_small_object_are_measured_whole() {
             "frame {k}: {largest} px, {ratio} sigma"
         );
     }
+}
+
+/// The middle dot of `scene` measured alone from a circle 0.58 px off its
+/// centre and 0.4 px too large: the measurement, its largest |error| (px)
+/// and |error| / `sigma`.
+fn middle_dot(scene: &vicurve::render::scene::Scene) -> (vicurve::fit::Measurement, f64, f64) {
+    let image = vicurve::render::scene::render_scene(scene).unwrap();
+    let truth = &scene.items[4].shape;
+    let Shape::Circle { cx, cy, r } = *truth else {
+        panic!("a dot grid's dots are circles");
+    };
+    let init = InitialCurve::Circle {
+        cx: cx + 0.5,
+        cy: cy - 0.3,
+        r: r + 0.4,
+    };
+    let m = measure(&image, &init, &FitConfig::default()).unwrap();
+    let (largest, ratio) = m
+        .samples
+        .iter()
+        .map(|s| {
+            let e = truth.signed_distance(s.x, s.y).abs();
+            (e, e / s.sigma)
+        })
+        .fold((0.0f64, 0.0f64), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+    (m, largest, ratio)
+}
+
+/// A dot of a dense grid measured alone: its neighbours' light lies in
+/// its band, which took it for the dot's (0.36 px off at 28 `sigma` for
+/// radius 5 at a pitch of 14 under a 1.5 px blur; 0.64 px for radius 6 at
+/// a pitch of 18 under 2.5 px: bench/probes/grids.py before the
+/// neighbours were rendered). The whole-object fit renders the
+/// neighbours it finds around the dot with it: within 0.1 px and 4
+/// `sigma`.
+#[test]
+fn a_dot_among_close_neighbours_is_measured_with_them() {
+    for (r, pitch, blur, seed) in [(5.0, 14.0, 1.5, 41), (6.0, 18.0, 2.5, 42)] {
+        let scene = crate::common::dot_grid(r, pitch, blur, seed);
+        let (m, largest, ratio) = middle_dot(&scene);
+        let last = m.stages.last().unwrap();
+        println!(
+            "radius {r}, pitch {pitch}, blur {blur}: {}, whole object {}, largest error \
+             {largest:.3} px, {ratio:.1} sigma",
+            m.outcome, last.whole_object
+        );
+        assert_eq!(m.outcome, Outcome::Converged);
+        assert!(last.whole_object, "radius {r}, pitch {pitch}");
+        assert!(
+            largest <= 0.1 && ratio <= 4.0,
+            "radius {r}, pitch {pitch}: {largest:.3} px, {ratio:.1} sigma"
+        );
+    }
+}
+
+/// Dots 2 px apart under a 2.5 px blur, which merges their images: where
+/// the neighbours' light cannot be rendered with the dot, its `sigma` is
+/// charged with the spread and its samples flagged, so that the error
+/// (1.5 px) is within 3 `sigma` (34 before).
+#[test]
+fn a_dot_merged_with_its_neighbours_is_not_reported_sure() {
+    let scene = crate::common::dot_grid(6.0, 14.0, 2.5, 43);
+    let (m, largest, ratio) = middle_dot(&scene);
+    let flagged = m.misfit_summary().flagged;
+    println!(
+        "merged dots: largest error {largest:.3} px, {ratio:.1} sigma, {flagged} of {} \
+         samples flagged",
+        m.samples.len()
+    );
+    assert!(ratio <= 3.0, "{largest:.3} px at {ratio:.1} sigma");
 }
