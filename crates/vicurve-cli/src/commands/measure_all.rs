@@ -74,12 +74,13 @@ pub fn summary(all: &AllResult, kind: Kind) {
         );
     } else {
         eprintln!(
-        "vicurve: {} {} object(s) found (threshold {:.4}, noise {:.4}); left out: {} small, {} faint, {} cut by the border",
-        all.objects.len(),
-        if f.bright { "bright" } else { "dark" },
-        f.threshold,
-        f.noise,
+            "vicurve: {} {} object(s) found (threshold {:.4}, noise {:.4}); left out: {} small{}, {} faint, {} cut by the border",
+            all.objects.len(),
+            if f.bright { "bright" } else { "dark" },
+            f.threshold,
+            f.noise,
             f.small,
+            small_limits(f),
             f.faint,
             f.border
         );
@@ -95,8 +96,29 @@ pub fn summary(all: &AllResult, kind: Kind) {
     }
 }
 
-/// Exit 3 when some object failed (the others are written).
+/// The least area and length the small regions were under, and the
+/// options that lower them (empty without small regions).
+fn small_limits(f: &vicurve::objects::Found) -> String {
+    if f.small == 0 {
+        return String::new();
+    }
+    format!(
+        " (under {:.0} px^2 or a {:.0} px boundary: --min-area, --min-length)",
+        f.min_area, f.min_length
+    )
+}
+
+/// Exit 3 when some object failed (the others are written); exit 1 when
+/// no object was found but some were left out as small (nothing was
+/// measured, and the user should lower the limits).
 pub fn finish(all: &AllResult) -> Result<(), Failure> {
+    let f = &all.found;
+    if all.objects.is_empty() && f.small > 0 {
+        return Err(Failure::Error(format!(
+            "no object measured: {} left out as too small (least area {:.0} px^2, least length {:.0} px); lower --min-area or --min-length to measure them",
+            f.small, f.min_area, f.min_length
+        )));
+    }
     match all.failed() {
         0 => Ok(()),
         n => Err(Failure::Diverged(format!(

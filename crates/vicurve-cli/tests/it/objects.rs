@@ -125,6 +125,49 @@ fn a_touching_pair_fails_and_the_exit_code_says_so() {
     }
 }
 
+/// Dots all under the least area: nothing is measured, so the run fails
+/// (exit 1) and says which options measure them; with those lowered, all
+/// are measured.
+#[test]
+fn dots_all_too_small_are_not_a_silent_success() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let image = vicurve::Image::from_fn(60, 60, |x, y| {
+        let near = [[15.3, 15.6], [44.2, 15.4], [15.1, 44.3], [44.6, 44.7]]
+            .iter()
+            .any(|c| (x as f64 - c[0]).hypot(y as f64 - c[1]) <= 3.5);
+        if near {
+            0.8
+        } else {
+            0.2
+        }
+    });
+    let img = p(d, "dots.png");
+    vicurve::io::save_image(img.as_ref(), &image, 8).unwrap();
+    let run = vicurve(&["measure", &img, "--all"]);
+    let stderr = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    let last = stderr.lines().last().unwrap();
+    assert!(
+        last.contains("no object measured: 4 left out as too small") && last.contains("--min-area"),
+        "{last}"
+    );
+    let table = p(d, "objects.csv");
+    let run = vicurve(&[
+        "measure",
+        &img,
+        "--all",
+        "--min-area",
+        "10",
+        "--min-length",
+        "10",
+        "--table",
+        &table,
+    ]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    assert_eq!(csv(&table).len(), 5);
+}
+
 /// `synth grid` then `grid`: one row per circle, strains near the truth.
 #[test]
 fn grid_strains_from_a_synthetic_grid() {
