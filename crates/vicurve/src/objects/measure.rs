@@ -68,8 +68,9 @@ pub(crate) fn measure_one(
     let radius = (c.region.pixels as f64 / std::f64::consts::PI).sqrt();
     let capped = capped_config(&c.region, c.neighbour, &base, radius);
     // Too close for a band of its own: measured on the narrowest band,
-    // kept only if the whole-object fit, which renders the neighbours'
-    // light with the object's, takes over (`fit::whole`).
+    // kept only if the whole-object fit takes over with the neighbours'
+    // light rendered (`fit::whole`; without them, it took their light for
+    // the object's, or the object is several merged into one region).
     let (fit, close) = match capped {
         Err(failure @ ObjectFailure::TooClose { .. }) if base.stages.is_none() => {
             let narrowest = FitConfig {
@@ -81,7 +82,10 @@ pub(crate) fn measure_one(
         other => (other, None),
     };
     measure_from_start(image, sampler, out, start, fit, config, |m| {
-        let whole = m.stages.last().is_some_and(|s| s.whole_object);
+        let whole = m
+            .stages
+            .last()
+            .is_some_and(|s| s.whole_object && s.neighbours > 0);
         match &close {
             Some(failure) if !whole => Some(failure.clone()),
             _ => check_curve(c, m),
