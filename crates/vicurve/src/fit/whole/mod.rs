@@ -122,14 +122,64 @@ const REFINEMENTS: usize = 3;
 /// any neighbours its last band sees ([`unmodelled`]).
 pub(super) fn refined(sampler: &Sampler, m: Measurement, spacing: f64) -> Measurement {
     let started = std::time::Instant::now();
-    let Some(start) = Start::of(sampler, &m) else {
-        return unmodelled(sampler, m);
+    let Some(look) = Look::of(&m) else {
+        return m;
     };
-    match fitted(&start, spacing) {
-        Some((best, outline)) => {
-            best.measurement(m, outline, spacing, started.elapsed().as_secs_f64())
+    // The neighbours, looked for once: within the reach of the window
+    // (of twice the guessed blur without the band fit's), which takes in
+    // the band's.
+    let reach = look.band_blur.map_or(2.0 * look.guess, |_| look.guess);
+    let points = dense_points(&m.curve, 1.0);
+    let margin = margin(reach).max(look.half_width);
+    let found = neighbours::around(sampler, &points, margin, reach);
+    if let Some(start) = Start::of(sampler, &m, &look, found.as_deref().unwrap_or_default()) {
+        if let Some((best, outline)) = fitted(&start, spacing) {
+            return best.measurement(m, outline, spacing, started.elapsed().as_secs_f64());
         }
-        None => unmodelled(sampler, m),
+    }
+    // Where the window's search could not tell the neighbours, the
+    // band's own reach may still (a large object beyond it).
+    let found = found.or_else(|| neighbours::around(sampler, &points, look.half_width, look.guess));
+    unmodelled(m, &look, &points, found.as_deref())
+}
+
+/// What decides whether and how `m` is measured whole: a converged closed
+/// silhouette whose last stage is a pixel edge or the paper's profile,
+/// with a rendering of at most [`MAX_WORK`].
+struct Look {
+    /// The last stage's pixel-edge blur, px (`None` after the paper's
+    /// profile).
+    band_blur: Option<f64>,
+    /// That blur, else the edge spread's estimate (1 px without one), at
+    /// least [`MIN_GUESS`].
+    guess: f64,
+    /// The last stage's band half-width, px.
+    half_width: f64,
+}
+
+impl Look {
+    /// `m`'s, when it qualifies.
+    fn of(m: &Measurement) -> Option<Look> {
+        let last = m.stages.last()?;
+        if m.outcome != Outcome::Converged || !m.curve.is_closed() {
+            return None;
+        }
+        let band_blur = match last.profile {
+            Profile::PixelEdge { blur, .. } => Some(blur),
+            Profile::Paper {
+                kind: Kind::Silhouette,
+            } => None,
+            _ => return None,
+        };
+        let guess = band_blur
+            .or_else(|| m.edge_spread.map(|e| optical_blur(e.sigma)))
+            .unwrap_or(1.0)
+            .max(MIN_GUESS);
+        (work_of(&m.curve, guess, 0.0) <= MAX_WORK).then_some(Look {
+            band_blur,
+            guess,
+            half_width: last.half_width,
+        })
     }
 }
 
@@ -165,35 +215,29 @@ fn fitted(start: &Start, spacing: f64) -> Option<(Fit<'_>, Outline)> {
 
 /// `m` with every sample flagged as a misfit and its `sigma` charged with
 /// the edge's spread, where another object's light reaches its last band
-/// (within three spreads of it) and the whole-object fit did not take it
+/// (one of the neighbours `found` lies within three spreads of the band
+/// around `points`, the curve) and the whole-object fit did not take it
 /// in: the band's profile takes that light for the edge's, which moves
 /// the curve by up to about a spread, and its residuals do not show it
 /// (a dot of a dense grid under a blur as large as the gaps). Also where
-/// the object cannot be told from its neighbours ([`neighbours::around`]
-/// is `None`). Only for the objects the whole-object fit could take
-/// ([`MAX_WORK`]); else, or without such neighbours, `m`.
-fn unmodelled(sampler: &Sampler, mut m: Measurement) -> Measurement {
-    let Some(last) = m.stages.last() else {
-        return m;
+/// the object cannot be told from its neighbours (`found` is `None`,
+/// [`neighbours::around`]). Else `m`.
+fn unmodelled(
+    mut m: Measurement,
+    look: &Look,
+    points: &[[f64; 2]],
+    found: Option<&[SplineCurve]>,
+) -> Measurement {
+    let spread = spread(look.guess);
+    let reach = look.half_width + 3.0 * spread;
+    let seen = |c: &SplineCurve| {
+        dense_points(c, 1.0)
+            .iter()
+            .any(|&p| neighbours::nearest(points, p) <= reach)
     };
-    let blur = match last.profile {
-        Profile::PixelEdge { blur, .. } => blur,
-        Profile::Paper {
-            kind: Kind::Silhouette,
-        } => m.edge_spread.map_or(1.0, |e| optical_blur(e.sigma)),
-        _ => return m,
-    };
-    let curve = &m.curve;
-    if m.outcome != Outcome::Converged || !curve.is_closed() || work_of(curve, blur, 0.0) > MAX_WORK
-    {
+    if found.is_some_and(|f| !f.iter().any(seen)) {
         return m;
     }
-    let points = dense_points(curve, 1.0);
-    let seen = neighbours::around(sampler, &points, last.half_width, blur);
-    if seen.is_some_and(|found| found.is_empty()) {
-        return m;
-    }
-    let spread = spread(blur);
     for s in &mut m.samples {
         s.sigma = s.sigma.hypot(spread);
         s.misfit = true;
@@ -226,51 +270,30 @@ pub(super) struct Start {
 }
 
 impl Start {
-    /// The start, when `m` qualifies: a converged closed silhouette
-    /// without corners whose last stage is an isotropic pixel edge (or
-    /// the paper's profile, where neighbours are found: their light is
-    /// one reason the edge's blur could not be estimated), with
-    /// neighbours within the window's reach or a blur times largest
-    /// curvature of at least [`MIN_BLUR_CURVATURE`], and a rendering of
-    /// at most [`MAX_WORK`].
-    fn of(sampler: &Sampler, m: &Measurement) -> Option<Start> {
-        let last = m.stages.last()?;
+    /// The start of `m` (which qualifies as `look` says) with the
+    /// neighbours `found`: without corners, its last stage an isotropic
+    /// pixel edge (or the paper's profile, where neighbours are found:
+    /// their light is one reason the edge's blur could not be estimated),
+    /// with neighbours or a blur times largest curvature of at least
+    /// [`MIN_BLUR_CURVATURE`], and a rendering of at most [`MAX_WORK`].
+    fn of(sampler: &Sampler, m: &Measurement, look: &Look, found: &[SplineCurve]) -> Option<Start> {
         let curve = &m.curve;
-        if m.outcome != Outcome::Converged || !curve.is_closed() || !curve.corners().is_empty() {
+        let isotropic = matches!(
+            m.stages.last()?.profile,
+            Profile::PixelEdge { anisotropy, .. } if anisotropy.is_none()
+        );
+        if !curve.corners().is_empty() || (look.band_blur.is_some() && !isotropic) {
             return None;
         }
-        let band_blur = match last.profile {
-            Profile::PixelEdge { blur, anisotropy } if anisotropy.is_none() => Some(blur),
-            Profile::Paper {
-                kind: Kind::Silhouette,
-            } => None,
-            _ => return None,
-        };
-        let guess = band_blur
-            .or_else(|| m.edge_spread.map(|e| optical_blur(e.sigma)))
-            .unwrap_or(1.0)
-            .max(MIN_GUESS);
-        if work_of(curve, guess, 0.0) > MAX_WORK {
+        let curved = spread(look.guess) * curve.largest_curvature(0.25) >= MIN_BLUR_CURVATURE;
+        if found.is_empty() && !(curved && look.band_blur.is_some()) {
             return None;
         }
-        // Without the band fit's blur, the neighbours within the reach of
-        // twice the guess, the most the search below tries.
-        let reach = if band_blur.is_some() {
-            guess
-        } else {
-            2.0 * guess
-        };
-        let found = neighbours::around(sampler, &dense_points(curve, 1.0), margin(reach), reach);
-        let found = found.unwrap_or_default();
-        let curved = spread(guess) * curve.largest_curvature(0.25) >= MIN_BLUR_CURVATURE;
-        if found.is_empty() && !(curved && band_blur.is_some()) {
-            return None;
-        }
-        let blur = match band_blur {
+        let blur = match look.band_blur {
             Some(b) => b,
-            None => Start::build(sampler, m, guess, &found)?.best_blur()?,
+            None => Start::build(sampler, m, look.guess, found)?.best_blur()?,
         };
-        Start::build(sampler, m, blur, &found)
+        Start::build(sampler, m, blur, found)
     }
 
     /// The start of `m` under `blur` with the neighbours `found`; `None`

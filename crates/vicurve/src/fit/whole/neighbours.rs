@@ -133,8 +133,14 @@ impl Searched {
 
     /// The box's pixels inside the closed polygon `points`.
     fn inside(&self, points: &[[f64; 2]]) -> Vec<usize> {
+        let [x0, y0, x1, y1] = points_box(points);
         (0..self.w * self.h)
-            .filter(|&k| polygon_contains(points, self.at(k)))
+            .filter(|&k| {
+                let p = self.at(k);
+                (x0..=x1).contains(&p[0])
+                    && (y0..=y1).contains(&p[1])
+                    && polygon_contains(points, p)
+            })
             .collect()
     }
 
@@ -231,7 +237,7 @@ impl Searched {
 }
 
 /// The distance from `p` to the nearest of `points`, px.
-fn nearest(points: &[[f64; 2]], p: [f64; 2]) -> f64 {
+pub(super) fn nearest(points: &[[f64; 2]], p: [f64; 2]) -> f64 {
     points
         .iter()
         .map(|q| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2))
