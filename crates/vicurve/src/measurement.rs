@@ -423,6 +423,13 @@ pub struct MisfitSummary {
     pub worst_inflation: f64,
 }
 
+/// The last of `stages` run on a band, before any whole-object stage
+/// ([`StageReport::whole_object`]): the one a tracked frame continues
+/// from (a whole-object stage is run again on each frame).
+pub(crate) fn last_band_stage(stages: &[StageReport]) -> Option<&StageReport> {
+    stages.iter().rev().find(|s| !s.whole_object)
+}
+
 /// NaN, the serde default of [`Sample::sigma_noise`].
 fn nan() -> f64 {
     f64::NAN

@@ -92,9 +92,7 @@ impl TrackState {
         curve_length: f64,
         levels_vary: bool,
     ) -> Option<TrackState> {
-        // The last band stage: a whole-object stage after it is redone
-        // on each frame after the band stage (`whole/`).
-        let last = stages.iter().rev().find(|s| !s.whole_object)?;
+        let last = crate::measurement::last_band_stage(stages)?;
         TrackState::from_last_stage(
             last.profile,
             last.elements,

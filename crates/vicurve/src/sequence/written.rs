@@ -57,7 +57,7 @@ pub fn rebuild(data: &SplineCurveData) -> Result<SplineCurve, String> {
 /// back gives the same from its last band stage (not a whole-object one)
 /// and gray levels.
 pub fn tracking_state(m: &Measurement, written: &SplineCurve) -> Option<TrackState> {
-    let last = m.stages.iter().rev().find(|s| !s.whole_object)?;
+    let last = crate::measurement::last_band_stage(&m.stages)?;
     TrackState::from_last_stage(
         last.profile,
         last.elements,

@@ -71,7 +71,7 @@ use crate::interp::Sampler;
 use crate::virtual_image::pixel_edge::optical_blur;
 use crate::virtual_image::{Kind, Profile};
 use model::{Fit, Model, Outline, Part};
-use render::{dense_points, quadrature_step, spread, window, Window};
+use render::{dense_points, near, quadrature_step, spread, window, Window};
 
 /// The whole object is measured where the blur's spread times the
 /// largest curvature reaches this. Below it the pixel-edge profile's
@@ -230,11 +230,7 @@ fn unmodelled(
 ) -> Measurement {
     let spread = spread(look.guess);
     let reach = look.half_width + 3.0 * spread;
-    let seen = |c: &SplineCurve| {
-        dense_points(c, 1.0)
-            .iter()
-            .any(|&p| neighbours::nearest(points, p) <= reach)
-    };
+    let seen = |c: &SplineCurve| dense_points(c, 1.0).iter().any(|&p| near(points, p, reach));
     if found.is_some_and(|f| !f.iter().any(seen)) {
         return m;
     }

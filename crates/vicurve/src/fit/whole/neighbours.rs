@@ -16,7 +16,7 @@
 //! box inside the image (it is larger than the box allows for). A speck of
 //! a few pixels starts from the circle of its area.
 
-use super::render::{points_box, spread};
+use super::render::{near, points_box, spread};
 use super::MAX_SHIFT;
 use crate::curve::{polygon_contains, SplineCurve};
 use crate::fit::reference::CURVE_SPACING;
@@ -147,7 +147,7 @@ impl Searched {
     /// Whether pixel `k` lies inside `points` or within `d` px of them.
     fn within(&self, k: usize, points: &[[f64; 2]], d: f64) -> bool {
         let p = self.at(k);
-        polygon_contains(points, p) || nearest(points, p) <= d
+        polygon_contains(points, p) || near(points, p, d)
     }
 
     /// The label of the region of the object's phase with most of the
@@ -183,7 +183,7 @@ impl Searched {
         points: &[[f64; 2]],
         reach: f64,
     ) -> Option<Vec<SplineCurve>> {
-        let mut near = vec![false; regions.len()];
+        let mut reached = vec![false; regions.len()];
         let mut out_of_box = vec![false; regions.len()];
         let mut centroid = vec![[0.0; 2]; regions.len()];
         for (k, &l) in labels.iter().enumerate() {
@@ -200,12 +200,12 @@ impl Searched {
             let c = &mut centroid[l as usize];
             c[0] += p[0] / r.pixels as f64;
             c[1] += p[1] / r.pixels as f64;
-            if !near[l as usize] && nearest(points, p) <= reach {
-                near[l as usize] = true;
+            if !reached[l as usize] && near(points, p, reach) {
+                reached[l as usize] = true;
             }
         }
         let mut curves = Vec::new();
-        for r in regions.iter().filter(|r| near[r.label as usize]) {
+        for r in regions.iter().filter(|r| reached[r.label as usize]) {
             if out_of_box[r.label as usize] {
                 return None;
             }
@@ -234,15 +234,6 @@ impl Searched {
         }
         Some(curves)
     }
-}
-
-/// The distance from `p` to the nearest of `points`, px.
-pub(super) fn nearest(points: &[[f64; 2]], p: [f64; 2]) -> f64 {
-    points
-        .iter()
-        .map(|q| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2))
-        .fold(f64::INFINITY, f64::min)
-        .sqrt()
 }
 
 #[cfg(test)]

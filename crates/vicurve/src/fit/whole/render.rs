@@ -411,7 +411,7 @@ pub(super) fn window(sampler: &Sampler, points: &[[f64; 2]], margin: f64) -> Win
     for j in j0..=j1 {
         for i in i0..=i1 {
             let (x, y) = (i as f64, j as f64);
-            if !(polygon_contains(points, [x, y]) || near(points, x, y, margin)) {
+            if !(polygon_contains(points, [x, y]) || near(points, [x, y], margin)) {
                 continue;
             }
             if let Some(g) = sampler.pixel(i, j) {
@@ -448,12 +448,12 @@ pub(super) fn dense_points(curve: &SplineCurve, step: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Whether `(x, y)` lies within `margin` of one of `points`.
-fn near(points: &[[f64; 2]], x: f64, y: f64, margin: f64) -> bool {
+/// Whether `p` lies within `margin` px of one of `points`.
+pub(super) fn near(points: &[[f64; 2]], p: [f64; 2], margin: f64) -> bool {
     let m2 = margin * margin;
     points
         .iter()
-        .any(|p| (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y) <= m2)
+        .any(|q| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) <= m2)
 }
 
 #[cfg(test)]
