@@ -81,7 +81,8 @@ impl PyMeasurement {
 
     /// Standard deviation of a shift of the whole curve along its normals,
     /// common to every sample and not in `sigma`, pixels: what reading
-    /// the tone curve from the edge leaves uncertain (0 for a linear image
+    /// the tone curve from the edge leaves uncertain (also when the reading
+    /// leaned to an encoding too weakly to undo it; 0 for a linear image
     /// or a tone curve given). One sample's whole uncertainty is
     /// `hypot(sigma, sigma_shift)`.
     #[getter]

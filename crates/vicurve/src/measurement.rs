@@ -460,17 +460,15 @@ impl Measurement {
     /// The standard deviation of a shift of the whole curve along its
     /// normals, common to every sample, pixels: what reading the tone
     /// curve from the edge leaves uncertain
-    /// ([`ToneEstimate::position_sd`]) when the curve was measured in the
-    /// linear light of that reading; 0 otherwise (a linear image, or a
-    /// tone curve given). Not in [`Sample::sigma`]: a term every sample
+    /// ([`ToneEstimate::position_sd`]: when the curve was measured in the
+    /// linear light of that reading, and when the reading kept the image
+    /// linear for want of evidence against an encoding); 0 otherwise (a
+    /// linear image, or a tone curve given). Not in [`Sample::sigma`]: a term every sample
     /// shares does not average down, so a fit to the samples (a circle, a
     /// width) adds it to its own deviation, as
     /// [`crate::derived::closed_measures`] does for the radius.
     pub fn sigma_shift(&self) -> f64 {
-        match self.tone_estimate {
-            Some(e) if !self.tone.is_identity() => e.position_sd,
-            _ => 0.0,
-        }
+        self.tone_estimate.map_or(0.0, |e| e.position_sd)
     }
 
     /// Residual RMS of the last stage, gray levels.

@@ -90,20 +90,88 @@ pub fn edge_spread(sampler: &Sampler, curve: &SplineCurve, half_width: f64) -> O
     };
     let data = band_data_where(sampler, curve, (half_width, thin), MAX_PIXELS, |_| true)?;
     let total = spread_about_mean(&data)?;
-    let binned = Binned::new(&data);
-    let ssr = |s: f64| binned.profile_ssr(|r| phi_cdf(-r / s));
-    // Golden-section search on log s; 30 steps shrink its interval by
-    // 0.618^30 ~ 5e-7.
-    let s = golden(0.05f64.ln(), (half_width / 3.0).max(0.1).ln(), 30, |x| {
-        ssr(x.exp())
-    })
-    .exp();
+    let clip = sampler
+        .clip_levels()
+        .filter(|&(lo, hi)| data.iter().any(|&(_, v)| v <= lo || v >= hi));
+    let (s, r0, binned) = match clip {
+        None => {
+            let binned = Binned::new(&data);
+            (best_spread(&binned, half_width), 0.0, binned)
+        }
+        Some(clip) => censored_spread(&data, clip, half_width),
+    };
     Some(EdgeSpread {
         sigma: s,
         line_width: None,
-        fit_quality: 1.0 - ssr(s) / total,
+        fit_quality: 1.0 - binned.profile_ssr(|r| phi_cdf(-(r - r0) / s)) / total,
         pixels: data.len(),
     })
+}
+
+/// The spread `s` of the best `A + C Phi(-r / s)` through the binned
+/// pixels, for a band of `half_width`: golden-section search on `log s`
+/// between 0.05 px and `half_width / 3`; 30 steps shrink its interval by
+/// 0.618^30 ~ 5e-7.
+fn best_spread(binned: &Binned, half_width: f64) -> f64 {
+    let ssr = |s: f64| binned.profile_ssr(|r| phi_cdf(-r / s));
+    golden(0.05f64.ln(), (half_width / 3.0).max(0.1).ln(), 30, |x| {
+        ssr(x.exp())
+    })
+    .exp()
+}
+
+/// Rounds of [`censored_spread`] at most.
+const CENSOR_ROUNDS: usize = 6;
+
+/// [`edge_spread`]'s fit on a band some of whose pixels the image's
+/// encoding clipped (levels `clip`): as the pixel-edge fit (`correlation`),
+/// a clipped pixel counts only where the fitted profile falls short of its
+/// clip, all of them left out at first; and the profile's centre `r0` is
+/// fitted too, since the coarse stages' curve, which the clip moved, may
+/// lie a pixel off the edge. Returns the spread, that centre and the bins
+/// of the pixels that count. A saturated backlight at 1.6 times the clip
+/// level read as a spread of 1.38 px an edge blurred by 2.17 px, its
+/// clipped plateau holding the profile's top down.
+fn censored_spread(
+    data: &[(f64, f64)],
+    (lo, hi): (f64, f64),
+    half_width: f64,
+) -> (f64, f64, Binned) {
+    let fit = |kept: &[(f64, f64)]| {
+        let binned = Binned::new(kept);
+        let reach = half_width / 3.0;
+        let centre = |s: f64| {
+            golden(-reach, reach, 24, |r0| {
+                binned.profile_ssr(|r| phi_cdf(-(r - r0) / s))
+            })
+        };
+        let ssr = |s: f64| {
+            let r0 = centre(s);
+            binned.profile_ssr(|r| phi_cdf(-(r - r0) / s))
+        };
+        let s = golden(0.05f64.ln(), reach.max(0.1).ln(), 30, |x| ssr(x.exp())).exp();
+        (s, centre(s), binned)
+    };
+    let clipped = |v: f64| v <= lo || v >= hi;
+    let mut kept: Vec<(f64, f64)> = data.iter().copied().filter(|d| !clipped(d.1)).collect();
+    let mut best = fit(&kept);
+    for _ in 0..CENSOR_ROUNDS {
+        let (s, r0) = (best.0, best.1);
+        let Some((_, (a, c))) = best.2.profile_fit(|r| phi_cdf(-(r - r0) / s)) else {
+            break;
+        };
+        let counts = |&(r, v): &(f64, f64)| {
+            let g = a + c * phi_cdf(-(r - r0) / s);
+            !clipped(v) || (v >= hi && g < hi) || (v <= lo && g > lo)
+        };
+        let next: Vec<(f64, f64)> = data.iter().copied().filter(counts).collect();
+        if next.len() == kept.len() {
+            break;
+        }
+        kept = next;
+        best = fit(&kept);
+    }
+    best
 }
 
 /// The integral of `f` over `[lo, hi]` by Simpson's rule on `n`
@@ -295,6 +363,13 @@ impl Binned {
     /// (linear least squares in `A`, `C`), `g` taken at each bin's mean
     /// distance.
     fn profile_ssr(&self, g: impl Fn(f64) -> f64) -> f64 {
+        self.profile_fit(g).map_or(f64::INFINITY, |(ssr, _)| ssr)
+    }
+
+    /// The best `A + C g(r)` through the pixels, as [`Binned::profile_ssr`]:
+    /// its residual sum of squares and `(A, C)`; `None` when `g` does not
+    /// vary over the bins.
+    fn profile_fit(&self, g: impl Fn(f64) -> f64) -> Option<(f64, (f64, f64))> {
         let (mut n, mut sg, mut sgg, mut sf, mut sfg, mut sff) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for &[count, r, f, ff] in &self.bins {
             let v = g(r);
@@ -307,11 +382,11 @@ impl Binned {
         }
         let det = n * sgg - sg * sg;
         if det.abs() < 1e-300 {
-            return f64::INFINITY;
+            return None;
         }
         let a = (sgg * sf - sg * sfg) / det;
         let c = (n * sfg - sg * sf) / det;
-        (sff - a * sf - c * sfg).max(0.0)
+        Some(((sff - a * sf - c * sfg).max(0.0), (a, c)))
     }
 }
 

@@ -209,6 +209,10 @@ fn print_tone(m: &Measurement) {
             e.gamma, e.evidence, e.shift, e.position_sd
         ),
         (t, _) if !t.is_identity() => println!("tone:        {t} undone before measuring"),
+        (_, Some(e)) if e.position_sd > 0.0 => println!(
+            "tone:        undecided: the edge's profile leans to a power law {:.2} (evidence {:.0} noise variances, too little to undo it); measured as linear, the edge may be {:+.3} px along the normals from here (shift below; --tone CURVE if you know it)",
+            e.gamma, e.evidence, e.shift
+        ),
         _ => {}
     }
 }

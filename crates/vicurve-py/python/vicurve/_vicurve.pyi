@@ -118,7 +118,7 @@ class Result:
         """Standard deviation of each sample along the normal, pixels (N): noise and model misfit."""
     @property
     def sigma_shift(self) -> float:
-        """Standard deviation of a shift of the whole curve, common to every sample, pixels (the tone reading's; 0 when none)."""
+        """Standard deviation of a shift of the whole curve, common to every sample, pixels (the tone reading's, also when it was too weak to undo an encoding; 0 when none)."""
     @property
     def sigma_noise(self) -> npt.NDArray[np.float64]:
         """The image noise's share of sigma, pixels (N)."""

@@ -4,6 +4,7 @@
 //! Gauss–Newton step by the Woodbury identity (see the [module
 //! docs](super)).
 
+use super::censor::{observed, Censored};
 use super::{left_image, polarity_sign, Accumulator, Correlation, Moments, Step, StepFailure};
 use crate::band::Band;
 use crate::interp::Sampler;
@@ -19,6 +20,8 @@ struct Pass<'a> {
     sampler: &'a Sampler,
     /// The pixel values, when the profile is pushed.
     pushed: Option<&'a [f64]>,
+    /// Pushed: the pixels the image's encoding clipped (`censor`).
+    censored: Option<&'a Censored>,
     /// The last iteration's levels (pixels displaced out of the image take
     /// them).
     levels: Option<(f64, f64)>,
@@ -35,6 +38,7 @@ impl Pass<'_> {
             lambda,
             sampler,
             pushed,
+            censored,
             levels,
             displaced_gradient,
         } = *self;
@@ -53,6 +57,10 @@ impl Pass<'_> {
             let (f, gamma) = match pushed {
                 Some(values) => {
                     let (gamma, d) = band.profile_at(i, u);
+                    let model = levels.map(|(a, c)| a + c * gamma);
+                    let Some(f) = observed(censored, i, model, values[i]) else {
+                        continue;
+                    };
                     if displaced_gradient {
                         dg = d;
                     }
@@ -62,7 +70,7 @@ impl Pass<'_> {
                         acc.g_proj[j] += wg * v;
                         acc.d_proj[j] += wd * v;
                     }
-                    (values[i], gamma)
+                    (f, gamma)
                 }
                 None => {
                     let [x, y] = band.pos[i];
@@ -112,6 +120,7 @@ impl Pass<'_> {
             acc.sum_gg += w * gamma * gamma;
             acc.sum_fg += wf * gamma;
             acc.sum_ff += wf * f;
+            acc.sum_w += w;
         }
     }
 }
@@ -130,6 +139,7 @@ impl Correlation {
             lambda,
             sampler,
             pushed: self.pushed.as_deref(),
+            censored: self.censored.as_ref(),
             levels: self.levels,
             displaced_gradient: self.displaced_gradient,
         };
@@ -172,8 +182,13 @@ impl Correlation {
     /// current profile's).
     fn gather(&mut self) -> Moments {
         let pushed = self.pushed.is_some();
+        // With censored pixels, the weight of those the pass counted.
+        let n = match self.censored {
+            Some(_) => self.acc.iter().map(|a| a.sum_w).sum(),
+            None => self.count,
+        };
         let mut m = Moments {
-            n: self.count,
+            n,
             ..Moments::default()
         };
         let rhs = &mut self.delta;

@@ -43,10 +43,12 @@ pub enum LevelModel {
     /// measurement whose first converged stage finds that the varying
     /// levels explain no more than noise would (even light): they would
     /// only cost precision. The pixel-edge stage tries again, with
-    /// elements of `element_length` and of a half and a quarter of it, and
-    /// takes them when they explain significantly more (light that changes
-    /// faster along the curve, as a star's lobes run in and out of a
-    /// vignetted field; see `Correlation::levels_needed`).
+    /// elements of `element_length` and of a half and a quarter of it
+    /// (each at most a quarter of a closed curve: an object smaller than
+    /// the elements asked for still follows light that changes across it),
+    /// and takes them when they explain significantly more (light that
+    /// changes faster along the curve, as a star's lobes run in and out of
+    /// a vignetted field; see `Correlation::levels_needed`).
     Varying {
         /// Length of the levels' elements along the curve, pixels (`>= 8`):
         /// the longest scale over which the light may change.
@@ -120,6 +122,15 @@ impl LevelModel {
             return None;
         }
         Basis::new(LEVEL_DEGREE, count.min(MAX_LEVEL_ELEMENTS), length, closed).ok()
+    }
+
+    /// The longest element that gives varying levels on a closed reference
+    /// of parameter length `length` (pixels): a quarter of it
+    /// ([`LevelModel::basis`]'s fewest elements). Open curves get none
+    /// shorter than asked: on a short open curve round a corner, two level
+    /// elements took up the corner's misfit and the fit went 3.7 px off.
+    pub(crate) fn longest_closed_element(length: f64) -> f64 {
+        length / (LEVEL_DEGREE + 1) as f64
     }
 
     /// Errors: [`crate::Error::InvalidParameter`] for an element length

@@ -64,6 +64,7 @@
 //! No allocation happens in `iterate`: the per-thread accumulators are made
 //! once in `new`.
 
+mod censor;
 mod global;
 pub mod levels;
 mod misfit;
@@ -81,6 +82,7 @@ use crate::solver::{BandCholesky, DenseCholesky, SymBandMatrix};
 use crate::spline::Basis;
 use crate::virtual_image::Polarity;
 use crate::virtual_image::Profile;
+use censor::{observed, Censored};
 use levels::{LevelBasis, LevelModel};
 use rayon::prelude::*;
 use std::sync::OnceLock;
@@ -107,6 +109,9 @@ struct Accumulator {
     sum_gg: f64,
     sum_fg: f64,
     sum_ff: f64,
+    /// The weight of the pixels the pass counted (pushed profile with
+    /// censored pixels: fewer than the band's).
+    sum_w: f64,
     outside: Option<[f64; 2]>,
     outside_count: usize,
 }
@@ -129,6 +134,7 @@ impl Accumulator {
                 sum_gg: 0.0,
                 sum_fg: 0.0,
                 sum_ff: 0.0,
+                sum_w: 0.0,
                 outside: None,
                 outside_count: 0,
             })
@@ -145,6 +151,7 @@ impl Accumulator {
         self.sum_gg = 0.0;
         self.sum_fg = 0.0;
         self.sum_ff = 0.0;
+        self.sum_w = 0.0;
         self.outside = None;
         self.outside_count = 0;
     }
@@ -350,6 +357,9 @@ pub(crate) struct Correlation {
     /// The pixel values at the band pixels when the profile is pushed (see
     /// the [module docs](self)); `None` when the image is pulled back.
     pushed: Option<Vec<f64>>,
+    /// Pushed profile: the band pixels the image's encoding clipped, when
+    /// any are (see `censor`).
+    censored: Option<Censored>,
     /// The last step, `dLambda`.
     delta: Vec<f64>,
     /// The last residual sum of squares.
@@ -445,6 +455,7 @@ impl Correlation {
             robust: vec![1.0; band_len],
             levels: None,
             pushed: None,
+            censored: None,
             delta: vec![0.0; n],
             ssr: 0.0,
             noise_var: None,
@@ -564,6 +575,9 @@ impl Correlation {
         }
         let mut values: Vec<f64> = read.into_iter().flatten().collect();
         let mut corr = Correlation::new(band, basis, levels)?;
+        corr.censored = sampler
+            .clip_levels()
+            .and_then(|clip| Censored::find(&values, clip, sampler.pixel_noise()));
         let Profile::PixelEdge { blur, .. } = corr.band.profile() else {
             corr.pushed = Some(values);
             return Ok(corr);
@@ -693,6 +707,9 @@ impl Correlation {
     /// Take the noise variance estimated on another run of the stage.
     pub fn set_noise_var(&mut self, noise_var: Option<f64>) {
         self.noise_var = noise_var;
+        if let (Some(c), Some(v)) = (self.censored.as_mut(), noise_var) {
+            c.set_noise(v.sqrt());
+        }
     }
 
     /// Number of unknowns of the displacement.
@@ -757,17 +774,18 @@ impl Correlation {
         let values = self.pushed.as_deref()?;
         let band = &self.band;
         let levels = self.varying.as_ref().map(|v| &v.levels);
+        let censored = self.censored.as_ref();
         levels_ssr(levels, values.len(), stride, |i| {
             let w = band.weight[i];
+            if w == 0.0 {
+                return None;
+            }
             let u = self.displacement_at(i, lambda);
-            (w != 0.0).then(|| {
-                [
-                    w,
-                    values[i],
-                    gamma(i, band.r[i] - u),
-                    self.tilt_factor(i, u),
-                ]
-            })
+            let (g, k) = (gamma(i, band.r[i] - u), self.tilt_factor(i, u));
+            // A clipped pixel's light as the last iteration's levels expect.
+            let model = self.levels_of_pixel(i).map(|(a, c)| (a + c * g) * k);
+            let f = observed(censored, i, model, values[i])?;
+            Some([w, f, g, k])
         })
     }
 
@@ -803,6 +821,12 @@ impl Correlation {
         }
     }
 
+    /// Whether some band pixels are at a clip level of the image's
+    /// encoding (pushed profile only; see `censor`).
+    pub fn censored(&self) -> bool {
+        self.censored.is_some()
+    }
+
     /// Whether the levels vary along the curve.
     pub fn varying_levels(&self) -> bool {
         self.varying.is_some()
@@ -819,7 +843,8 @@ impl Correlation {
     /// the rest to the displacement, which wiggles.
     ///
     /// The levels are fitted by least squares at `lambda` with elements
-    /// of `length` and, when `shorter`, half and a quarter of it (down to
+    /// of `length` and, when `shorter`, half and a quarter of it (each at
+    /// most [`LevelModel::longest_closed_element`] of a closed curve, down to
     /// [`levels::MIN_LEVEL_ELEMENT`], and while the number of elements
     /// grows): each is taken over the best before it (the global pair
     /// first) when the drop of the residual sum of squares exceeds its
@@ -884,7 +909,14 @@ impl Correlation {
         };
         let (mut best, mut best_ssr, mut best_dim) = (None, global, levels::FEATURES);
         let tries = if shorter { 3 } else { 1 };
+        // A closed curve shorter than the fewest elements of `length`
+        // tries the longest elements it can have.
+        let longest = match closed {
+            true => LevelModel::longest_closed_element(total),
+            false => f64::INFINITY,
+        };
         for len in [length, length / 2.0, length / 4.0].into_iter().take(tries) {
+            let len = len.min(longest);
             if len < levels::MIN_LEVEL_ELEMENT {
                 break;
             }
@@ -932,7 +964,10 @@ impl Correlation {
         match &self.pushed {
             Some(values) => {
                 let gamma = band.profile_at(i, u).0;
-                Some([w, values[i], gamma, self.tilt_factor(i, u)])
+                let k = self.tilt_factor(i, u);
+                let model = self.levels_of_pixel(i).map(|(a, c)| (a + c * gamma) * k);
+                let f = observed(self.censored.as_ref(), i, model, values[i])?;
+                Some([w, f, gamma, k])
             }
             None => {
                 let [x, y] = band.pos[i];
@@ -953,8 +988,8 @@ impl Correlation {
         let (f, gamma) = match &self.pushed {
             Some(values) => {
                 let (gamma, _) = band.profile_at(i, u);
-                let k = self.tilt_factor(i, u);
-                return Some((a + c * gamma) * k - values[i]);
+                let g = (a + c * gamma) * self.tilt_factor(i, u);
+                return Some(g - observed(self.censored.as_ref(), i, Some(g), values[i])?);
             }
             None => {
                 let [x, y] = band.pos[i];
@@ -993,6 +1028,8 @@ impl Correlation {
             .into_par_iter()
             .map(|k| k * stride)
             .filter(|&i| self.robust[i] >= 0.5 && band.weight[i] > 0.0)
+            // A clipped pixel's residual is its expected light's, no noise.
+            .filter(|&i| !self.censored.as_ref().is_some_and(|c| c.is_clipped(i)))
             .filter_map(|i| Some((band.r[i], self.residual(i, lambda, sampler)?)))
             .collect();
         if res.len() < 3 {
@@ -1001,7 +1038,7 @@ impl Correlation {
         res.sort_unstable_by(|l, r| l.0.total_cmp(&r.0));
         let sum: f64 = res.windows(2).map(|w| (w[1].1 - w[0].1).powi(2)).sum();
         let var = sum / (2.0 * (res.len() - 1) as f64);
-        self.noise_var = Some(var);
+        self.set_noise_var(Some(var));
         Some(var)
     }
 

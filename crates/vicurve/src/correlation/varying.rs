@@ -8,6 +8,7 @@
 //! right-hand side and the contrast averaged over each function's support.
 //! Nothing is allocated per iteration.
 
+use super::censor::{observed, Censored};
 use super::{left_image, polarity_sign, Correlation, Moments, Step, StepFailure};
 use crate::band::Band;
 use crate::correlation::levels::{features, LevelBasis};
@@ -289,6 +290,8 @@ struct Context<'a> {
     lambda: &'a [f64],
     /// The pixel values, when the profile is pushed.
     pushed: Option<&'a [f64]>,
+    /// Pushed: the pixels the image's encoding clipped (`censor`).
+    censored: Option<&'a Censored>,
 }
 
 impl Correlation {
@@ -307,6 +310,7 @@ impl Correlation {
             basis: &self.basis,
             lambda,
             pushed: self.pushed.as_deref(),
+            censored: self.censored.as_ref(),
         };
         var.first_pass(ctx, sampler);
         left_image(
@@ -348,6 +352,7 @@ impl Varying {
             basis,
             lambda,
             pushed,
+            censored,
         } = ctx;
         let lb = &self.levels;
         let theta = &self.theta;
@@ -392,7 +397,18 @@ impl Varying {
                             if let Some(t) = tilt {
                                 scale = 1.0 + t[i] * (band.r[i] - u);
                             }
-                            (values[i], gamma)
+                            // A clipped pixel's light as the last iteration's
+                            // levels expect, or left out of both passes (a
+                            // NaN value marks it).
+                            let model = have_theta.then(|| {
+                                let (a, c) = lb.levels(i, theta);
+                                (a + c * gamma) * scale
+                            });
+                            let Some(f) = observed(censored, i, model, values[i]) else {
+                                *fo = f64::NAN;
+                                continue;
+                            };
+                            (f, gamma)
                         }
                         None => {
                             let [x, y] = band.pos[i];
@@ -557,7 +573,7 @@ impl Varying {
             let end = (start + per).min(band.len());
             for i in start..end {
                 let w = band.weight[i];
-                if w == 0.0 && pushed.is_some() {
+                if (w == 0.0 || fbuf[i].is_nan()) && pushed.is_some() {
                     continue;
                 }
                 let first = band.first[i] as usize;

@@ -31,6 +31,12 @@ pub(super) const MIN_EDGE_FIT_QUALITY: f64 = 0.8;
 pub(crate) const BLUR_FIT_PIXELS: usize = 8192;
 /// Runs of the pixel-edge stage with an updated blur, at most.
 pub(super) const MAX_BLUR_UPDATES: usize = 3;
+/// ... and where the image's encoding clipped some band pixels
+/// (`Correlation::censored`): the blur estimated on the coarse stages'
+/// curve, which the clip moved, starts farther off (a backlight at 1.6
+/// times the clip level: 1.74 px for 2.17), and each run at a fixed blur
+/// brings the curve only part of the way.
+pub(super) const MAX_CENSORED_BLUR_UPDATES: usize = 8;
 /// A fitted blur that differs from the one in use by more than this (pixels)
 /// is worth another run.
 pub(crate) const BLUR_TOLERANCE: f64 = 0.01;
@@ -167,14 +173,16 @@ pub(super) fn fit_blur(corr: &Correlation, lambda: &[f64], current: f64) -> f64 
 }
 
 /// [`fit_blur`], the curve's offset profiled out where the band bends
-/// enough for it to trade off with the blur (`fit/blur_offset.rs`), with
-/// the [`Coupling`] there at the fitted blur.
+/// enough for it to trade off with the blur (`fit/blur_offset.rs`), or
+/// where the image's encoding clipped some of its pixels (the profile's
+/// top or foot is missing, and what is left of it moves with the blur as
+/// the offset does), with the [`Coupling`] there at the fitted blur.
 pub(super) fn fit_blur_and_offset(
     corr: &Correlation,
     lambda: &[f64],
     current: f64,
 ) -> (f64, Option<Coupling>) {
-    if !blur_offset::coupled(corr, current) {
+    if !(blur_offset::coupled(corr, current) || corr.censored()) {
         return (fit_blur(corr, lambda, current), None);
     }
     let blur = search_blur(&blur_offset::profiled_residual(corr, lambda), current);

@@ -31,7 +31,9 @@ pub(super) fn linear_sampler(sampler: &Sampler, tone: Tone) -> Result<Arc<Sample
         let light = crate::pages::collect(pixels.len(), pixels.iter().map(|&v| tone.to_linear(v)));
         let image = Image::new_finite(sampler.width(), sampler.height(), light)
             .map_err(|_| Error::invalid("tone", "the image's own pixels are not at hand"))?;
-        Ok(Sampler::new(&image, sampler.kind()))
+        let linear = Sampler::new(&image, sampler.kind());
+        linear.set_clip_levels(sampler.clip_levels());
+        Ok(linear)
     })
 }
 

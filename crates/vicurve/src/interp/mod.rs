@@ -149,6 +149,9 @@ pub struct Sampler {
     quantum: Arc<std::sync::OnceLock<Option<f64>>>,
     /// [`Sampler::pixel_noise`], likewise.
     pixel_noise: Arc<std::sync::OnceLock<f64>>,
+    /// [`Sampler::clip_levels`], likewise (or set by the sampler a linear
+    /// one was made from).
+    clip: Arc<std::sync::OnceLock<Option<(f64, f64)>>>,
     /// [`Sampler::linear`]: the samplers of the image in linear light made
     /// so far, by tone curve, shared by clones.
     linear: Arc<std::sync::Mutex<LinearSamplers>>,
@@ -233,6 +236,7 @@ impl Sampler {
             range: Arc::default(),
             quantum: Arc::default(),
             pixel_noise: Arc::default(),
+            clip: Arc::default(),
             linear: Arc::default(),
         }
     }
@@ -435,6 +439,27 @@ impl Sampler {
         (0..(w * h).div_ceil(stride))
             .into_par_iter()
             .map(move |i| (i * stride % w, i * stride / w))
+    }
+
+    /// The gray levels at which the image's encoding clips the light, `(0,
+    /// 1)`: those of an 8- or 16-bit image (a [`Sampler::quantum`] of 1/255
+    /// or 1/65535), and of its linear-light samplers, whose tone curves map
+    /// 0 and 1 to themselves. A pixel at one of them may have received
+    /// more light (a saturated backlight) or less; the pixel-edge fit takes
+    /// it as censored (`correlation`). `None` for other images (floating
+    /// point, or integer counts beyond 1), whose range says nothing of a
+    /// clip.
+    pub fn clip_levels(&self) -> Option<(f64, f64)> {
+        *self.clip.get_or_init(|| match self.quantum() {
+            Some(q) if q < 1.0 => Some((0.0, 1.0)),
+            _ => None,
+        })
+    }
+
+    /// Set [`Sampler::clip_levels`] (a linear-light sampler takes those of
+    /// the image it was made from); no effect once they are known.
+    pub(crate) fn set_clip_levels(&self, clip: Option<(f64, f64)>) {
+        let _ = self.clip.set(clip);
     }
 
     /// The variance of the rounding to [`Sampler::quantum`]'s steps `q`,

@@ -18,6 +18,7 @@ mod pyramid;
 mod refine;
 mod robust;
 mod run;
+mod saturation;
 mod settle;
 mod sharp;
 mod sigma;
