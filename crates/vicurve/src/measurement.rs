@@ -192,9 +192,17 @@ pub struct StageReport {
     /// window). Absent from result files when 0.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub neighbours: usize,
+    /// Band pixels at the darkest or brightest level of the image's
+    /// encoding (0 or 255 in 8 bits: a saturated backlight), which the
+    /// pixel-edge stage fitted as clipped, their light known only to lie
+    /// beyond that level (`correlation::censor`). Absent from result files
+    /// when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub clipped: usize,
 }
 
-/// Whether `n` is 0 (serde's test for [`StageReport::neighbours`]).
+/// Whether `n` is 0 (serde's test for [`StageReport::neighbours`] and
+/// [`StageReport::clipped`]).
 fn is_zero(n: &usize) -> bool {
     *n == 0
 }

@@ -189,6 +189,12 @@ pub fn print_summary(config: &FitConfig, m: &Measurement) {
             "shift:       {shift:.2e} px (uncertainty common to every sample, not in their sigma: the tone reading; add it in quadrature for one sample)"
         );
     }
+    if let Some(s) = m.stages.last().filter(|s| s.clipped > 0) {
+        println!(
+            "clipped:     {} of {} band pixels at the image's darkest or brightest level (saturated light): fitted as clipped, their light only known to lie beyond it",
+            s.clipped, s.band_pixels
+        );
+    }
     let misfit = m.misfit_summary();
     if misfit.flagged > 0 {
         println!(

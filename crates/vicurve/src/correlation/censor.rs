@@ -5,8 +5,8 @@
 //! darkest as 0 ([`Sampler::clip_levels`]). Such a pixel says only that
 //! its light was at least (at most) the clip level. Fitted as a value, a
 //! clipped plateau holds the edge's profile down to the clip: a backlight
-//! at 1.2 to 1.6 times the clip level moved a blurred edge by 0.5 to 1.2
-//! px, with a `sigma` of a hundredth of that.
+//! at 1.2 to 1.6 times the clip level moved a blurred edge by 0.5 to 1.3
+//! px, at 50 to 110 times its `sigma`.
 //!
 //! The pushed fit instead compares the virtual image with what a clipped
 //! pixel's light is expected to be, given that it was clipped: for the
@@ -24,7 +24,7 @@
 
 /// Beyond this many noise deviations past its clip level, a virtual
 /// image agrees with a clipped pixel whatever its light: the pixel is
-/// left out (the expectation above differs from `g` by under `1e-9 s`).
+/// left out (the expectation above differs from `g` by under `1e-8 s`).
 const AGREES: f64 = 6.0;
 
 /// The clipped band pixels of a pushed fit and the image's noise.
@@ -59,6 +59,11 @@ impl Censored {
             0.0
         };
         Some(Censored { flags, noise })
+    }
+
+    /// How many band pixels are clipped.
+    pub(crate) fn count(&self) -> usize {
+        self.flags.iter().filter(|&&k| k != 0).count()
     }
 
     /// Whether band pixel `i` is clipped.

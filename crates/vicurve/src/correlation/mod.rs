@@ -827,6 +827,12 @@ impl Correlation {
         self.censored.is_some()
     }
 
+    /// How many band pixels are at a clip level of the image's encoding
+    /// (pushed profile only; see `censor`).
+    pub fn clipped(&self) -> usize {
+        self.censored.as_ref().map_or(0, Censored::count)
+    }
+
     /// Whether the levels vary along the curve.
     pub fn varying_levels(&self) -> bool {
         self.varying.is_some()

@@ -192,6 +192,7 @@ impl StageState {
             history: std::mem::take(&mut self.history),
             whole_object: false,
             neighbours: 0,
+            clipped: 0,
         }
     }
 }
@@ -988,7 +989,10 @@ impl Schedule<'_> {
                 }
             }
         };
-        let report = st.report(profile, corr.basis(), band_pixels, o);
+        let report = StageReport {
+            clipped: corr.clipped(),
+            ..st.report(profile, corr.basis(), band_pixels, o)
+        };
         self.reports.push(report);
         self.last = Some(Final {
             half_width: st.stage.half_width,

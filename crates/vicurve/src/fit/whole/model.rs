@@ -525,6 +525,7 @@ impl Fit<'_> {
             history: self.history,
             whole_object: true,
             neighbours: self.model.start.neighbours.len(),
+            clipped: 0,
         });
         m
     }

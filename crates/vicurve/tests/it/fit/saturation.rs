@@ -73,6 +73,8 @@ fn a_disc_on_a_saturated_backlight_is_measured_through_the_clip() {
             m.outcome, stats.bias, stats.max_abs
         );
         assert_eq!(m.outcome, Outcome::Converged);
+        // The clipped pixels are said.
+        assert!(m.stages.last().unwrap().clipped > 100);
         assert!(stats.bias.abs() < bias, "{stats:?}");
         assert!(stats.max_abs < max, "{stats:?}");
         assert!(worst < ratio, "worst |error| / sigma {worst}");
@@ -106,6 +108,8 @@ fn a_black_and_white_disc_is_not_taken_for_a_clipped_one() {
         let stats = evaluate(&m.points(), &DISC).unwrap();
         eprintln!("black and white, noise {noise}: {stats:?}");
         assert_eq!(m.outcome, Outcome::Converged);
+        // The clipped pixels are said.
+        assert!(m.stages.last().unwrap().clipped > 100);
         assert!(stats.bias.abs() < bias, "{stats:?}");
         assert!(stats.max_abs < max, "{stats:?}");
     }
