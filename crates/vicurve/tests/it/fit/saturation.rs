@@ -4,10 +4,11 @@
 
 use vicurve::curve::InitialCurve;
 use vicurve::fit::{measure, FitConfig, Outcome};
-use vicurve::render::{render, Method, RenderSpec};
+use vicurve::render::{render, RenderSpec};
 use vicurve::truth::{evaluate, Shape};
-use vicurve::virtual_image::Kind;
 use vicurve::Image;
+
+use crate::common::spec;
 
 /// The discs' truth: radius 60 px in a 200 x 200 image.
 const DISC: Shape = Shape::Circle {
@@ -23,24 +24,15 @@ const START: InitialCurve = InitialCurve::Circle {
     r: 61.0,
 };
 
-/// A dark disc (light 0.06) of radius 60 px on a backlight of light
+/// A dark disc (a sixteenth of the backlight) of radius 60 px on a backlight of light
 /// `backlight` (1: the 8-bit range's top), blurred by 2 px, noise 1 % of
 /// the contrast, recorded in 8 bits: the backlight and the top of the
 /// edge's profile clipped at 255.
 fn backlit_disc(backlight: f64, seed: u64) -> Image {
     let spec = RenderSpec {
-        width: 200,
-        height: 200,
-        shape: DISC,
-        kind: Kind::Silhouette,
-        method: Method::Coverage,
         foreground: 0.05,
         background: 0.8,
-        blur_sigma: 2.0,
-        noise: 0.01,
-        seed,
-        bits: None,
-        ..RenderSpec::default()
+        ..spec(DISC, (200, 200), 2.0, 0.01, seed, None)
     };
     let light = render(&spec).unwrap();
     let scale = backlight / 0.8;
@@ -91,18 +83,9 @@ fn a_disc_on_a_saturated_backlight_is_measured_through_the_clip() {
 fn a_black_and_white_disc_is_not_taken_for_a_clipped_one() {
     for (noise, bias, max) in [(0.0, 2e-3, 1e-2), (0.01, 3e-3, 3e-2)] {
         let spec = RenderSpec {
-            width: 200,
-            height: 200,
-            shape: DISC,
-            kind: Kind::Silhouette,
-            method: Method::Coverage,
             foreground: 1.0,
             background: 0.0,
-            blur_sigma: 1.0,
-            noise,
-            seed: 3,
-            bits: Some(8),
-            ..RenderSpec::default()
+            ..spec(DISC, (200, 200), 1.0, noise, 3, Some(8))
         };
         let m = measure(&render(&spec).unwrap(), &START, &FitConfig::default()).unwrap();
         let stats = evaluate(&m.points(), &DISC).unwrap();
