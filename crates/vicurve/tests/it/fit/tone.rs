@@ -188,7 +188,7 @@ fn tracked_frames_keep_the_first_frames_tone() {
     assert!((bias - first_bias).abs() < 0.01, "{bias} {first_bias}");
 }
 
-/// Gamma-encoded discs of low contrast (light 0.15 on 0.45) under 2 %
+/// Gamma-encoded discs of low contrast (light 0.45 on 0.15) under 2 %
 /// noise: the profile leans to an encoding, by too little evidence to
 /// undo it, and the disc is measured as linear, 0.26 px off. The
 /// reading says how far the encoding would have moved the edge
