@@ -233,7 +233,7 @@ const EVIDENCE: f64 = 25.0;
 /// standard deviations of a chi-square of one degree of freedom: noise
 /// alone rarely gets there) is not chosen, but its shift is the
 /// uncertainty the reading leaves ([`ToneEstimate::position_sd`]):
-/// gamma-encoded objects of low contrast or under 2 % noise read as 1.8
+/// gamma-encoded objects of low contrast or under 2 % noise read as 1.7
 /// to 2.5 at evidence 10 to 22, and came out 0.15 to 0.3 px off with no
 /// uncertainty said. Linear images may get there too (a pentagon under 5
 /// % noise read as 1.6 at evidence 22): their shift is then said, not

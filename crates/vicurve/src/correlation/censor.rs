@@ -39,12 +39,17 @@ pub(crate) struct Censored {
 
 impl Censored {
     /// The band pixels among `values` at a clip level of `clip` (dark,
-    /// bright), with the image's `noise` (gray levels); `None` when none
-    /// is.
-    pub(crate) fn find(values: &[f64], (low, high): (f64, f64), noise: f64) -> Option<Censored> {
+    /// bright), with the image's `noise()` (gray levels; asked for only
+    /// when some are); `None` when none is.
+    pub(crate) fn find(
+        values: &[f64],
+        (low, high): (f64, f64),
+        noise: impl FnOnce() -> f64,
+    ) -> Option<Censored> {
         if !values.iter().any(|&v| v >= high || v <= low) {
             return None;
         }
+        let noise = noise();
         let flags = values
             .iter()
             .map(|&v| match v {
@@ -82,16 +87,18 @@ impl Censored {
 }
 
 /// The value band pixel `i` (recorded as `value`) is compared with when
-/// the virtual image there is `model` (`None`: no levels yet): `value`
-/// for a pixel not clipped; for a clipped one, its light's expectation
-/// given the clip (module docs), or `None` (left out) before the first
-/// levels and where the virtual image lies far beyond the clip.
+/// the virtual image there is `model()` (`None`: no levels yet; called
+/// for a clipped pixel only, so that the fit's loop over an unclipped
+/// band evaluates no model for it): `value` for a pixel not clipped; for
+/// a clipped one, its light's expectation given the clip (module docs),
+/// or `None` (left out) before the first levels and where the virtual
+/// image lies far beyond the clip.
 #[inline]
 pub(crate) fn observed(
     censored: Option<&Censored>,
     i: usize,
-    model: Option<f64>,
     value: f64,
+    model: impl FnOnce() -> Option<f64>,
 ) -> Option<f64> {
     let Some(c) = censored else {
         return Some(value);
@@ -100,7 +107,7 @@ pub(crate) fn observed(
     if sign == 0.0 {
         return Some(value);
     }
-    let g = model?;
+    let g = model()?;
     // How far short of the clip the virtual image falls, in noise
     // deviations (negative beyond it).
     let short = sign * (value - g);
@@ -156,19 +163,19 @@ mod tests {
     /// the truncated mean in between.
     #[test]
     fn a_clipped_pixel_is_compared_with_its_expected_light() {
-        assert_eq!(observed(None, 0, None, 0.5), Some(0.5));
-        let c = Censored::find(&[0.5, 1.0, 0.0], (0.0, 1.0), 0.01).unwrap();
-        assert_eq!(observed(Some(&c), 0, Some(0.3), 0.5), Some(0.5));
-        assert_eq!(observed(Some(&c), 1, None, 1.0), None);
-        assert!((observed(Some(&c), 1, Some(0.5), 1.0).unwrap() - 1.0).abs() < 1e-3);
-        assert_eq!(observed(Some(&c), 1, Some(1.1), 1.0), None);
-        let at = observed(Some(&c), 1, Some(1.0), 1.0).unwrap();
+        assert_eq!(observed(None, 0, 0.5, || None), Some(0.5));
+        let c = Censored::find(&[0.5, 1.0, 0.0], (0.0, 1.0), || 0.01).unwrap();
+        assert_eq!(observed(Some(&c), 0, 0.5, || Some(0.3)), Some(0.5));
+        assert_eq!(observed(Some(&c), 1, 1.0, || None), None);
+        assert!((observed(Some(&c), 1, 1.0, || Some(0.5)).unwrap() - 1.0).abs() < 1e-3);
+        assert_eq!(observed(Some(&c), 1, 1.0, || Some(1.1)), None);
+        let at = observed(Some(&c), 1, 1.0, || Some(1.0)).unwrap();
         assert!((at - (1.0 + 0.01 * (2.0 / std::f64::consts::PI).sqrt())).abs() < 1e-12);
-        let dark = observed(Some(&c), 2, Some(0.0), 0.0).unwrap();
+        let dark = observed(Some(&c), 2, 0.0, || Some(0.0)).unwrap();
         assert!((dark + 0.01 * (2.0 / std::f64::consts::PI).sqrt()).abs() < 1e-12);
-        assert!(Censored::find(&[0.5, 0.7], (0.0, 1.0), 0.01).is_none());
-        let sharp = Censored::find(&[1.0], (0.0, 1.0), 0.0).unwrap();
-        assert_eq!(observed(Some(&sharp), 0, Some(0.9), 1.0), Some(1.0));
-        assert_eq!(observed(Some(&sharp), 0, Some(1.0), 1.0), None);
+        assert!(Censored::find(&[0.5, 0.7], (0.0, 1.0), || 0.01).is_none());
+        let sharp = Censored::find(&[1.0], (0.0, 1.0), || 0.0).unwrap();
+        assert_eq!(observed(Some(&sharp), 0, 1.0, || Some(0.9)), Some(1.0));
+        assert_eq!(observed(Some(&sharp), 0, 1.0, || Some(1.0)), None);
     }
 }

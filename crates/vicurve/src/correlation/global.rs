@@ -57,8 +57,8 @@ impl Pass<'_> {
             let (f, gamma) = match pushed {
                 Some(values) => {
                     let (gamma, d) = band.profile_at(i, u);
-                    let model = levels.map(|(a, c)| a + c * gamma);
-                    let Some(f) = observed(censored, i, model, values[i]) else {
+                    let model = || levels.map(|(a, c)| a + c * gamma);
+                    let Some(f) = observed(censored, i, values[i], model) else {
                         continue;
                     };
                     if displaced_gradient {

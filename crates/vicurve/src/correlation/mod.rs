@@ -577,7 +577,7 @@ impl Correlation {
         let mut corr = Correlation::new(band, basis, levels)?;
         corr.censored = sampler
             .clip_levels()
-            .and_then(|clip| Censored::find(&values, clip, sampler.pixel_noise()));
+            .and_then(|clip| Censored::find(&values, clip, || sampler.pixel_noise()));
         let Profile::PixelEdge { blur, .. } = corr.band.profile() else {
             corr.pushed = Some(values);
             return Ok(corr);
@@ -783,8 +783,8 @@ impl Correlation {
             let u = self.displacement_at(i, lambda);
             let (g, k) = (gamma(i, band.r[i] - u), self.tilt_factor(i, u));
             // A clipped pixel's light as the last iteration's levels expect.
-            let model = self.levels_of_pixel(i).map(|(a, c)| (a + c * g) * k);
-            let f = observed(censored, i, model, values[i])?;
+            let model = || self.levels_of_pixel(i).map(|(a, c)| (a + c * g) * k);
+            let f = observed(censored, i, values[i], model)?;
             Some([w, f, g, k])
         })
     }
@@ -971,8 +971,8 @@ impl Correlation {
             Some(values) => {
                 let gamma = band.profile_at(i, u).0;
                 let k = self.tilt_factor(i, u);
-                let model = self.levels_of_pixel(i).map(|(a, c)| (a + c * gamma) * k);
-                let f = observed(self.censored.as_ref(), i, model, values[i])?;
+                let model = || self.levels_of_pixel(i).map(|(a, c)| (a + c * gamma) * k);
+                let f = observed(self.censored.as_ref(), i, values[i], model)?;
                 Some([w, f, gamma, k])
             }
             None => {
@@ -995,7 +995,7 @@ impl Correlation {
             Some(values) => {
                 let (gamma, _) = band.profile_at(i, u);
                 let g = (a + c * gamma) * self.tilt_factor(i, u);
-                return Some(g - observed(self.censored.as_ref(), i, Some(g), values[i])?);
+                return Some(g - observed(self.censored.as_ref(), i, values[i], || Some(g))?);
             }
             None => {
                 let [x, y] = band.pos[i];

@@ -400,11 +400,13 @@ impl Varying {
                             // A clipped pixel's light as the last iteration's
                             // levels expect, or left out of both passes (a
                             // NaN value marks it).
-                            let model = have_theta.then(|| {
-                                let (a, c) = lb.levels(i, theta);
-                                (a + c * gamma) * scale
-                            });
-                            let Some(f) = observed(censored, i, model, values[i]) else {
+                            let model = || {
+                                have_theta.then(|| {
+                                    let (a, c) = lb.levels(i, theta);
+                                    (a + c * gamma) * scale
+                                })
+                            };
+                            let Some(f) = observed(censored, i, values[i], model) else {
                                 *fo = f64::NAN;
                                 continue;
                             };
