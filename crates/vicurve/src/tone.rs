@@ -199,12 +199,64 @@ pub struct ToneEstimate {
     /// proportional to `ln gamma`); and, when the power law is the curve
     /// chosen, a quarter of the shift (the reading mixes profiles of
     /// several shapes, and was seen 15 % off `ln gamma`). When the curve
-    /// chosen is linear: the shift itself if the power law has an
+    /// chosen is linear: the RMS distance from the linear fit's centre to
+    /// where linear light and each standard encoding would put the edge,
+    /// weighted by their likelihoods (0 where the profile rules the
+    /// encodings out), and at least the power law's shift when it has an
     /// encoding's exponent (over 1.5) and is preferred by some evidence
-    /// (over 9), not enough to be chosen; else 0.
+    /// (over 9), not enough to be chosen: an edge too faint, noisy or
+    /// finely rounded to tell an encoding from linear light may be where
+    /// the encoding puts it.
     pub position_sd: f64,
     /// Band pixels read.
     pub pixels: usize,
+    /// When the curve chosen is linear: how each standard encoding
+    /// ([`STANDARD_TONES`], in that order) fits the profile and where it
+    /// puts the edge; `None` for an encoding not fitted (the profile rules
+    /// out sRGB clearly enough that the power laws are not tried), and all
+    /// `None` when an encoding was chosen. The objects of one image pool
+    /// them (`objects/tone.rs`): the tone curve is the image's.
+    #[serde(default, skip_serializing_if = "no_alternatives")]
+    pub alternatives: [Option<Alternative>; 3],
+}
+
+/// A standard encoding as an alternative to the linear light a reading
+/// kept ([`ToneEstimate::alternatives`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Alternative {
+    /// The encoding.
+    pub tone: Tone,
+    /// How much worse than linear light it fits the edge's profile: the
+    /// rise of the residual sum of squares, in noise variances (negative:
+    /// better, though not clearly enough to be chosen).
+    pub excess: f64,
+    /// Where it puts the edge from where linear light does, along the
+    /// curve's normal, pixels.
+    pub centre: f64,
+}
+
+/// Whether a reading has no alternatives recorded (not written out).
+fn no_alternatives(a: &[Option<Alternative>; 3]) -> bool {
+    a.iter().all(Option::is_none)
+}
+
+/// The likelihood-weighted RMS of the alternatives' centres, linear light
+/// (centre 0, excess 0) included: where the encodings that `excess`
+/// (noise variances, of each alternative's fit over linear light's)
+/// allows would put the edge, pixels. An alternative's weight is
+/// `exp(-excess / 2)` against linear light's 1.
+pub fn allowed_spread(alternatives: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
+    let best = alternatives.clone().map(|a| a.0).fold(0.0, f64::min);
+    let (mut square, mut weights) = (0.0, (best / 2.0).exp());
+    for (excess, centre) in alternatives {
+        let w = (-(excess - best) / 2.0).exp();
+        square += w * centre * centre;
+        weights += w;
+    }
+    // Below a micropixel the encodings are ruled out: 0, not 1e-50.
+    Some((square / weights).sqrt())
+        .filter(|sd| *sd > 1e-6)
+        .unwrap_or(0.0)
 }
 
 /// The encodings real images use, tried before a fitted power law: sRGB
@@ -228,23 +280,23 @@ pub(crate) const FITTED_SYSTEMATIC: f64 = 0.25;
 /// chi-square of one degree of freedom beyond 5 standard deviations for a
 /// linear image)...
 const EVIDENCE: f64 = 25.0;
-/// Below [`EVIDENCE`], a power law of an exponent over [`LEAST_GAMMA`] that
-/// explains this many noise variances more than a linear tone (three
-/// standard deviations of a chi-square of one degree of freedom: noise
-/// alone rarely gets there) is not chosen, but its shift is the
-/// uncertainty the reading leaves ([`ToneEstimate::position_sd`]):
-/// gamma-encoded objects of low contrast or under 2 % noise read as 1.7
-/// to 2.5 at evidence 10 to 22, and came out 0.15 to 0.3 px off with no
-/// uncertainty said. Linear images may get there too (a pentagon under 5
-/// % noise read as 1.6 at evidence 22): their shift is then said, not
-/// undone.
-const UNDECIDED: f64 = 9.0;
 /// ... and its exponent exceeds this: the encodings in use raise the light
 /// to 1.8 to 2.6 (a true 2.2 was read as 1.95 to 2.24, sRGB as 2.24 to
 /// 2.43), while the other asymmetries of linear images read as 0.63 to
 /// 1.28 (motion blur, astigmatism, uneven light; docs/benchmarks.md,
 /// "Gamma-encoded images").
 pub(crate) const LEAST_GAMMA: f64 = 1.5;
+/// Below [`EVIDENCE`], a power law of an exponent over [`LEAST_GAMMA`] that
+/// explains this many noise variances more than a linear tone (three
+/// standard deviations of a chi-square of one degree of freedom) is not
+/// chosen, but its shift is at least the uncertainty the reading leaves
+/// ([`ToneEstimate::position_sd`]), whether the encodings could be weighed
+/// or not (a band that uneven light clutters).
+const UNDECIDED: f64 = 9.0;
+/// An encoding that fits the profile this many noise variances worse than
+/// linear light is ruled out (its weight `exp(-30)`), and the encodings
+/// after it are not tried ([`alternatives`]).
+const RULED_OUT: f64 = 60.0;
 /// The profile misfits when the power law's residual variance exceeds the
 /// neighbouring pixels' noise this many times...
 const MISFIT: f64 = 2.0;
@@ -281,10 +333,66 @@ pub fn band_half_width(spread: f64) -> f64 {
     4.0 * spread.max(0.5) + 2.0
 }
 
+/// How an image's gray levels were rounded: to steps of `quantum` (gray
+/// levels on `[0, 1]`; 0 for floating-point data), under a noise of
+/// standard deviation `noise` (gray levels, [`crate::interp::Sampler::pixel_noise`]).
+///
+/// Why: a noiseless image's plateaus round to whole levels, so that the
+/// tails of an edge whose levels fall between two steps flatten sooner on
+/// one side than on the other, and the power law took that asymmetry for
+/// a tone curve (linear stars read as encoded, and measured through the
+/// encoding a third of a pixel off: docs/benchmarks.md, "Tone readings
+/// that cannot decide").
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rounding {
+    /// The step between recorded levels (0: not rounded).
+    pub quantum: f64,
+    /// The image's noise, gray levels.
+    pub noise: f64,
+}
+
+impl Rounding {
+    /// The error rounding may leave on the mean of each of `bins` (sorted
+    /// by distance, as [`Binned`] makes them), gray levels: where the
+    /// profile changes by less than two steps within `reach` (pixels) on
+    /// either side, a bump of the fit spans a run of equal rounded levels
+    /// whose error it can follow, up to half a step (a plateau's tail, or
+    /// the whole ramp of a wide blur of low contrast); where it changes by
+    /// more, the error alternates within a bump and averages out (0). The
+    /// noise dithers the staircase: its first harmonic is `q/2 exp(-2 pi^2
+    /// noise^2 / q^2)`, a tenth of a step at a noise of a quarter step.
+    fn dead_zones(self, bins: &[[f64; 4]], reach: f64) -> Vec<f64> {
+        let q = self.quantum;
+        let ratio = if q > 0.0 { self.noise / q } else { 0.0 };
+        let most = 0.5 * q * (-2.0 * std::f64::consts::PI.powi(2) * ratio * ratio).exp();
+        if most < 1e-3 * q || bins.is_empty() {
+            return vec![0.0; bins.len()];
+        }
+        let means: Vec<f64> = bins.iter().map(|b| b[2] / b[0]).collect();
+        let (mut lo, mut hi) = (0, 0);
+        (0..bins.len())
+            .map(|k| {
+                let r = bins[k][1];
+                while bins[lo][1] < r - reach {
+                    lo += 1;
+                }
+                while hi + 1 < bins.len() && bins[hi + 1][1] <= r + reach {
+                    hi += 1;
+                }
+                let window = &means[lo..=hi];
+                let top = window.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let bottom = window.iter().copied().fold(f64::INFINITY, f64::min);
+                most * (1.0 - (top - bottom) / (2.0 * q)).max(0.0)
+            })
+            .collect()
+    }
+}
+
 /// The tone curve of the image around a measured edge, from the band's
 /// pixels `data` (`(r, v)`: signed distance to the curve, pixels, and
-/// gray level on `[0, 1]`; sorted by `r`, as `psf::band_data` gives them)
-/// and the edge's spread `spread` (pixels, [`crate::psf::edge_spread`]).
+/// gray level on `[0, 1]`; sorted by `r`, as `psf::band_data` gives them),
+/// the edge's spread `spread` (pixels, [`crate::psf::edge_spread`]) and
+/// how the image's levels were rounded.
 ///
 /// The profile is fitted as `v = (a + sum_k w_k E_k(x) + b x + d |x|)^(1 /
 /// gamma)` with `x = r - r0`, where the `E_k` are the edge responses of
@@ -293,10 +401,12 @@ pub fn band_half_width(spread: f64) -> f64 {
 /// light): any symmetric blur (a Gaussian, a defocus pillbox, a halo) is
 /// such a sum, so only the profile's asymmetry is left to `gamma`. The
 /// fit with `gamma = 1` is the reference of [`ToneEstimate::evidence`].
+/// A bin's mean within the error its rounding may leave
+/// ([`Rounding`]) of the model counts as fitted; beyond, by its excess.
 ///
 /// `None` when the data cannot say: gray levels outside `[0, 1]`, fewer
 /// than 200 pixels, no contrast, or a fit that does not converge.
-pub fn estimate(data: &[(f64, f64)], spread: f64) -> Option<ToneEstimate> {
+pub fn estimate(data: &[(f64, f64)], spread: f64, rounding: Rounding) -> Option<ToneEstimate> {
     if data.len() < 200
         || data
             .iter()
@@ -305,12 +415,48 @@ pub fn estimate(data: &[(f64, f64)], spread: f64) -> Option<ToneEstimate> {
         return None;
     }
     let binned = Binned::with_width(data, BIN_WIDTH);
+    let h = (band_half_width(spread) - 1.0) / 14.0;
+    let exact = vec![0.0; binned.bins.len()];
     let fit = ProfileFit {
         bins: &binned.bins,
-        h: (band_half_width(spread) - 1.0) / 14.0,
+        h,
+        dead: &exact,
         free: [false, false],
         fixed: None,
+        gaussian: false,
     };
+    let dead = rounding.dead_zones(&binned.bins, h);
+    // The image's own noise (trimmed of edges and clutter), when it
+    // dithers the rounding: what the band's neighbouring pixels differ by
+    // when it holds the edge alone.
+    let quantum = rounding.quantum;
+    let noise_floor = Some(rounding.noise * rounding.noise).filter(|n| *n > quantum * quantum);
+    if dead.iter().all(|d| *d == 0.0) {
+        return read(data, fit, spread, noise_floor);
+    }
+    // A noiseless image's rounding: its reading is kept only when the
+    // profile still reads an encoding with the rounding allowed for;
+    // else the rounded reading (linear light, the encodings it allows).
+    // The rounded fit alone reads less of a true encoding, whose
+    // asymmetry is also in how its tails reach their plateaus.
+    let exactly = read(data, fit, spread, noise_floor);
+    let rounded = read(data, ProfileFit { dead: &dead, ..fit }, spread, noise_floor);
+    match (exactly, rounded) {
+        (Some(e), Some(r)) if !e.curve.is_identity() && !r.curve.is_identity() => Some(e),
+        (e, None) => e,
+        (_, r) => r,
+    }
+}
+
+/// [`estimate`] on the binned profile of `fit` (`dead` set), from the
+/// band's pixels `data`; `noise_floor`: the image's noise variance when
+/// it exceeds a quantum's square (gray levels squared).
+fn read(
+    data: &[(f64, f64)],
+    fit: ProfileFit,
+    spread: f64,
+    noise_floor: Option<f64>,
+) -> Option<ToneEstimate> {
     let mean = data.iter().map(|d| d.1).sum::<f64>() / data.len() as f64;
     let mut start = [0.0; UNKNOWNS];
     start[0] = mean.max(LIGHT_FLOOR);
@@ -343,18 +489,35 @@ pub fn estimate(data: &[(f64, f64)], spread: f64) -> Option<ToneEstimate> {
         EVIDENCE
     };
     if !(evidence > needed && gamma > LEAST_GAMMA) {
-        // Linear enough: the standard encodings are not tried. A power law
-        // of an encoding's exponent that the profile prefers, though not
-        // by enough to be chosen (a faint or noisy edge), leaves the edge
-        // where that law would put it as likely as not.
-        let undecided = gamma > LEAST_GAMMA && evidence > UNDECIDED;
+        // Linear enough to keep; the standard encodings the profile still
+        // allows (a faint, noisy or noiseless 8-bit edge can hardly tell
+        // them from linear light) say how far the edge may be.
+        // A band whose neighbouring pixels differ by more than the
+        // image's noise holds more than the edge (clutter), which the
+        // encodings' distortions would be fitting.
+        let cluttered = noise_floor.is_some_and(|n| pixel_noise > MISFIT * n);
+        // A power law of an encoding's exponent the profile prefers, not
+        // by enough to be chosen, leaves the edge where that law would put
+        // it as likely as not, weighed or not.
+        let leaning = if gamma > LEAST_GAMMA && evidence > UNDECIDED {
+            point[R0].abs()
+        } else {
+            0.0
+        };
+        let alternatives = if cluttered {
+            [None; 3]
+        } else {
+            alternatives(fit, (&linear.0, linear.1, spread), noise)
+        };
+        let fitted = alternatives.iter().flatten().map(|a| (a.excess, a.centre));
         return Some(ToneEstimate {
             curve: Tone::Linear,
             gamma,
             shift: point[R0],
             evidence,
-            position_sd: if undecided { point[R0].abs() } else { 0.0 },
+            position_sd: allowed_spread(fitted).max(leaning),
             pixels: data.len(),
+            alternatives,
         });
     }
     let (curve, position_sd) = choose(with, start, power, noise, evidence);
@@ -365,7 +528,109 @@ pub fn estimate(data: &[(f64, f64)], spread: f64) -> Option<ToneEstimate> {
         evidence,
         position_sd,
         pixels: data.len(),
+        alternatives: [None; 3],
     })
+}
+
+/// Each standard encoding as an [`Alternative`] to linear light, both
+/// fitted to the profile with a Gaussian blur (the measurement's own
+/// model of the edge, `fit` with `gaussian` set) from the linear fit
+/// `linear` (its unknowns, for the centre and levels, and its residual
+/// sum of squares) and the edge's `spread` (pixels); `noise`: the noise
+/// variance of the evidence, or the Gaussian linear fit's residual
+/// variance where it misfits more. None when the Gaussian fits the
+/// profile clearly worse than the bumps (by the evidence an encoding
+/// needs). The power laws are fitted only when sRGB fits less than
+/// [`RULED_OUT`] noise variances worse than linear light (they bend the
+/// levels almost alike).
+///
+/// Why a Gaussian blur: the bumps follow any symmetric blur, and with
+/// them an encoding fits a linear edge's profile nearly as well as linear
+/// light, its centre moved (a linear disc under 5 % noise allowed sRGB
+/// with its edge 1.8 px away); the measurement itself takes the blur as
+/// Gaussian, and so does an encoding's alternative edge.
+fn alternatives(
+    fit: ProfileFit,
+    (point, linear, spread): (&[f64; UNKNOWNS], f64, f64),
+    noise: f64,
+) -> [Option<Alternative>; 3] {
+    let mut found = [None; 3];
+    let gaussian = ProfileFit {
+        gaussian: true,
+        free: [true, false],
+        fixed: None,
+        ..fit
+    };
+    let Some((base, rss)) = gaussian.minimise(gaussian_start(fit.bins, point, spread), false)
+    else {
+        return found;
+    };
+    let pixels: f64 = fit.bins.iter().map(|b| b[0]).sum();
+    // A blur that is not Gaussian (a defocus, the paper's profile): the
+    // encodings' distortions would be fitting its shape, not the light.
+    let dof = pixels - UNKNOWNS as f64;
+    if rss - linear > EVIDENCE.max(MISFIT_SHARE * dof) * noise {
+        return found;
+    }
+    let noise = noise.max(rss / (pixels - 6.0).max(1.0));
+    for (k, &tone) in STANDARD_TONES.iter().enumerate() {
+        let ruled_out = found[..k]
+            .iter()
+            .flatten()
+            .any(|a: &Alternative| a.excess > RULED_OUT);
+        if ruled_out {
+            break;
+        }
+        let encoded = ProfileFit {
+            fixed: Some(tone),
+            ..gaussian
+        };
+        let Some(fit) = encoded.minimise(in_light(tone, &base, true), false) else {
+            continue;
+        };
+        found[k] = Some(Alternative {
+            tone,
+            excess: (fit.1 - rss) / noise,
+            centre: fit.0[R0] - base[R0],
+        });
+    }
+    found
+}
+
+/// The start of a Gaussian fit ([`ProfileFit::gaussian`]): the bumps'
+/// fit `point`'s mid level and centre, half the difference of the
+/// profile's two ends (a tenth of its bins each) and the edge's `spread`.
+fn gaussian_start(bins: &[[f64; 4]], point: &[f64; UNKNOWNS], spread: f64) -> [f64; UNKNOWNS] {
+    let tenth = (bins.len() / 10).max(1);
+    let mean = |b: &[[f64; 4]]| {
+        let n: f64 = b.iter().map(|b| b[0]).sum();
+        b.iter().map(|b| b[2]).sum::<f64>() / n
+    };
+    let ends = (mean(&bins[..tenth]), mean(&bins[bins.len() - tenth..]));
+    let mut start = [0.0; UNKNOWNS];
+    start[0] = point[0];
+    start[1] = 0.5 * (ends.1 - ends.0);
+    start[2] = spread.max(0.1).ln();
+    start[R0] = point[R0];
+    start
+}
+
+/// The unknowns of a linear fit `point` taken to the light of `tone`,
+/// to first order about the mid level (a start for that encoding's fit:
+/// from the mean level alone its centre wandered 11 px off on a blurred
+/// noisy edge); of a Gaussian fit (`gaussian`), its `ln s` kept.
+fn in_light(tone: Tone, point: &[f64; UNKNOWNS], gaussian: bool) -> [f64; UNKNOWNS] {
+    let mid = point[0].clamp(0.01, 0.99);
+    let step = 1e-4;
+    let slope = (tone.to_linear(mid + step) - tone.to_linear(mid - step)) / (2.0 * step);
+    let mut light = *point;
+    light[0] = tone.to_linear(mid).max(LIGHT_FLOOR);
+    for (k, w) in light.iter_mut().enumerate().take(R0).skip(1) {
+        if !(gaussian && k == 2) {
+            *w *= slope;
+        }
+    }
+    light
 }
 
 /// The curve a reading chooses ([`ToneEstimate::curve`]) and the
@@ -455,10 +720,17 @@ fn bump(x: f64) -> f64 {
 struct ProfileFit<'a> {
     bins: &'a [[f64; 4]],
     h: f64,
+    /// Per bin, the error the rounding of its levels may leave
+    /// ([`Rounding::dead_zones`]): a residual within it counts as 0.
+    dead: &'a [f64],
     free: [bool; 2],
     /// A fixed encoding instead of the power law of `ln gamma` (which is
     /// then not an unknown).
     fixed: Option<Tone>,
+    /// A Gaussian blur instead of the bumps: the unknowns 1 and 2 are the
+    /// half contrast `c` and `ln s` of `c erf(x / (sqrt 2 s))`, the other
+    /// bumps' weights unused (0).
+    gaussian: bool,
 }
 
 /// A point of the fit: its residual sum of squares (the bins' means
@@ -507,16 +779,28 @@ impl ProfileFit<'_> {
         };
         let gamma = x[LOG_GAMMA].exp();
         let mut j = [0.0; UNKNOWNS];
-        for &[n, r, sum, _] in self.bins {
+        for (&[n, r, sum, _], &dead) in self.bins.iter().zip(self.dead) {
             let t = (r - x[R0]) / self.h;
             let mut light = x[0];
             let mut slope = 0.0;
-            for k in 0..BUMPS {
-                let kf = k as f64;
-                let edge = bump_edge(t - kf) + bump_edge(t + kf) - 1.0;
-                light += x[1 + k] * edge;
-                slope += x[1 + k] * (bump(t - kf) + bump(t + kf)) / self.h;
-                j[1 + k] = edge;
+            if self.gaussian {
+                // `c erf(x / (sqrt 2 s))` of `c = x[1]`, `ln s = x[2]`.
+                let s = x[2].exp();
+                let z = (r - x[R0]) / s;
+                let edge = libm::erf(z / std::f64::consts::SQRT_2);
+                let density = 2.0 * (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+                light += x[1] * edge;
+                slope += x[1] * density / s;
+                j[1] = edge;
+                j[2] = -x[1] * density * z;
+            } else {
+                for k in 0..BUMPS {
+                    let kf = k as f64;
+                    let edge = bump_edge(t - kf) + bump_edge(t + kf) - 1.0;
+                    light += x[1 + k] * edge;
+                    slope += x[1 + k] * (bump(t - kf) + bump(t + kf)) / self.h;
+                    j[1 + k] = edge;
+                }
             }
             // The plateaus' slopes: `b x` and `d |x|` (smoothed over the
             // first bump), in the light.
@@ -542,7 +826,12 @@ impl ProfileFit<'_> {
             } else {
                 0.0
             };
-            let res = v - sum / n;
+            let raw = v - sum / n;
+            if raw.abs() <= dead && dead > 0.0 {
+                // Within the rounding: no cost, and no pull on the unknowns.
+                continue;
+            }
+            let res = raw - raw.signum() * dead;
             e.cost += n * res * res;
             for a in 0..UNKNOWNS {
                 e.gradient[a] += n * j[a] * res;
@@ -659,7 +948,12 @@ mod tests {
 
     #[test]
     fn a_power_law_is_read_from_the_profile() {
-        let e = estimate(&profile(Tone::Gamma(2.2), gaussian_edge), 1.2).unwrap();
+        let e = estimate(
+            &profile(Tone::Gamma(2.2), gaussian_edge),
+            1.2,
+            Rounding::default(),
+        )
+        .unwrap();
         assert!((e.gamma / 2.2 - 1.0).abs() < 0.05, "{e:?}");
         assert!(e.evidence > 1000.0 && !e.curve.is_identity(), "{e:?}");
         // The power law's centre is where the edge is.
@@ -678,7 +972,7 @@ mod tests {
             (&pillbox as &dyn Fn(f64) -> f64, 2.3),
             (&gaussian_edge, 1.2),
         ] {
-            let e = estimate(&profile(Tone::Linear, p), spread).unwrap();
+            let e = estimate(&profile(Tone::Linear, p), spread, Rounding::default()).unwrap();
             assert_eq!(e.curve, Tone::Linear, "{e:?}");
             assert!((e.gamma - 1.0).abs() < 0.05, "{e:?}");
         }

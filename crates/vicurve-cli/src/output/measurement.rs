@@ -216,8 +216,8 @@ fn print_tone(m: &Measurement) {
         ),
         (t, _) if !t.is_identity() => println!("tone:        {t} undone before measuring"),
         (_, Some(e)) if e.position_sd > 0.0 => println!(
-            "tone:        undecided: the edge's profile leans to a power law {:.2} (evidence {:.0} noise variances, too little to undo it); measured as linear, the edge may be {:+.3} px along the normals from here (shift below; --tone CURVE if you know it)",
-            e.gamma, e.evidence, e.shift
+            "tone:        undecided: the edge's profile does not tell linear light from the usual encodings (power law read {:.2}, evidence {:.0} noise variances); measured as linear, the encodings it allows would move the edge by about {:.1e} px (shift below; --tone CURVE if you know it)",
+            e.gamma, e.evidence, e.position_sd
         ),
         _ => {}
     }

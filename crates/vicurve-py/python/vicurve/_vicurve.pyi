@@ -165,7 +165,7 @@ class Result:
         """The tone curve the gray levels were read with: "linear", "srgb" or {"gamma": g}."""
     @property
     def tone_estimate(self) -> Optional[Dict[str, Any]]:
-        """curve, gamma, shift, evidence, position_sd, pixels of the tone estimate, or None."""
+        """curve, gamma, shift, evidence, position_sd, pixels and (when linear light was kept) the standard encodings' alternatives of the tone estimate, or None."""
     @property
     def blur_corrected(self) -> bool: ...
     @property

@@ -105,5 +105,9 @@ fn estimate(sampler: &Sampler, curve: &SplineCurve, spread: f64) -> Option<ToneE
         _ => 1,
     };
     let data = psf::band_data_where(sampler, &stretch, (half_width, thin), TONE_PIXELS, keep)?;
-    tone::estimate(&data, spread)
+    let rounding = tone::Rounding {
+        quantum: sampler.quantum().unwrap_or(0.0),
+        noise: sampler.pixel_noise(),
+    };
+    tone::estimate(&data, spread, rounding)
 }

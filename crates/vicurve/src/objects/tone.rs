@@ -11,7 +11,7 @@ use crate::derived::closed_measures;
 use crate::fit::{FitConfig, Measurement};
 use crate::image::Image;
 use crate::interp::Sampler;
-use crate::tone::{Tone, ToneEstimate, FITTED_SYSTEMATIC, LEAST_GAMMA};
+use crate::tone::{allowed_spread, Tone, ToneEstimate, FITTED_SYSTEMATIC, LEAST_GAMMA};
 use rayon::prelude::*;
 
 use super::find::Candidate;
@@ -48,8 +48,11 @@ pub(super) fn agreed(
         .collect();
     let n = read.len() as f64;
     let total: f64 = read.iter().map(|r| r.1.evidence).sum();
-    if read.len() < LEAST_READ || total - n <= POOLED_SDS * (2.0 * n).sqrt() {
+    if read.len() < LEAST_READ {
         return objects;
+    }
+    if total - n <= POOLED_SDS * (2.0 * n).sqrt() {
+        return pooled_alternatives(objects);
     }
     let gamma = (read
         .iter()
@@ -59,7 +62,7 @@ pub(super) fn agreed(
         .exp();
     // Written so that NaN (no evidence at all) does not pass.
     if gamma.is_nan() || gamma <= LEAST_GAMMA {
-        return objects;
+        return pooled_alternatives(objects);
     }
     // The curve most objects read as encoded took (the first of the most
     // taken), else the pooled power law.
@@ -105,6 +108,58 @@ pub(super) fn agreed(
                 r
             }
             _ => o,
+        })
+        .collect()
+}
+
+/// `objects` whose readings kept linear light, with the uncertainty the
+/// standard encodings leave ([`ToneEstimate::position_sd`]) weighed by all
+/// the objects' readings at once: an encoding's excess over linear light
+/// is the sum of the objects' (the tone curve is the image's), and one
+/// that an object did not fit (ruled out) is ruled out. Small objects
+/// each allow an encoding that all of them together rule out (test
+/// `objects::scene::an_encoded_scene_is_read_by_its_objects_together`).
+fn pooled_alternatives(objects: Vec<ObjectResult>) -> Vec<ObjectResult> {
+    let linear = |o: &ObjectResult| {
+        o.measurement
+            .as_ref()
+            .filter(|m| m.tone.is_identity())
+            .and_then(|m| m.tone_estimate)
+            .filter(|e| e.curve.is_identity())
+    };
+    let mut excess = [0.0f64; 3];
+    let mut any = false;
+    for e in objects.iter().filter_map(linear) {
+        any = true;
+        for (sum, a) in excess.iter_mut().zip(e.alternatives) {
+            *sum += a.map_or(f64::INFINITY, |a| a.excess);
+        }
+    }
+    if !any {
+        return objects;
+    }
+    objects
+        .into_iter()
+        .map(|mut o| {
+            let Some(e) = linear(&o) else {
+                return o;
+            };
+            let pooled = excess
+                .iter()
+                .zip(e.alternatives)
+                .filter(|(x, _)| x.is_finite())
+                .filter_map(|(&x, a)| a.map(|a| (x, a.centre)));
+            let sd = allowed_spread(pooled);
+            if let Some(m) = o.measurement.as_mut() {
+                m.tone_estimate = Some(ToneEstimate {
+                    position_sd: sd,
+                    ..e
+                });
+                if m.curve.is_closed() {
+                    o.closed = closed_measures(m).ok();
+                }
+            }
+            o
         })
         .collect()
 }

@@ -201,7 +201,9 @@ fn semi_major_error<'a>(all: &'a AllResult, shape: &Shape) -> (&'a ObjectResult,
 /// worst semi-major axis 67 of its sigma off). Pooled, the readings are
 /// the image's: every object is measured in linear light (worst 0.45
 /// sigma). The same scene in linear light is left linear (its worst, 3.3
-/// sigma, is the same without the tone reading).
+/// sigma, is the same without the tone reading), and no encoding is left
+/// allowed: alone, 14 of the 30 objects allow one (a `sigma_shift` of
+/// 1e-3 to 0.23 px), all the objects together rule them out.
 #[test]
 fn an_encoded_scene_is_read_by_its_objects_together() {
     for tone in [Tone::Gamma(2.2), Tone::Linear] {
@@ -213,6 +215,9 @@ fn an_encoded_scene_is_read_by_its_objects_together() {
         for item in &scene.items {
             let (o, err, sd) = semi_major_error(&all, &item.shape);
             let m = o.measurement.as_ref().unwrap();
+            if tone.is_identity() {
+                assert!(m.sigma_shift() < 1e-3, "{:?}", m.tone_estimate);
+            }
             assert_eq!(
                 m.tone.is_identity(),
                 tone.is_identity(),
