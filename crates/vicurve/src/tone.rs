@@ -245,7 +245,7 @@ fn no_alternatives(a: &[Option<Alternative>; 3]) -> bool {
 /// (noise variances, of each alternative's fit over linear light's)
 /// allows would put the edge, pixels. An alternative's weight is
 /// `exp(-excess / 2)` against linear light's 1.
-pub fn allowed_spread(alternatives: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
+pub(crate) fn allowed_spread(alternatives: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
     let best = alternatives.clone().map(|a| a.0).fold(0.0, f64::min);
     let (mut square, mut weights) = (0.0, (best / 2.0).exp());
     for (excess, centre) in alternatives {
@@ -341,8 +341,8 @@ pub fn band_half_width(spread: f64) -> f64 {
 /// tails of an edge whose levels fall between two steps flatten sooner on
 /// one side than on the other, and the power law took that asymmetry for
 /// a tone curve (linear stars read as encoded, and measured through the
-/// encoding a third of a pixel off: docs/benchmarks.md, "Tone readings
-/// that cannot decide").
+/// encoding 0.37 to 0.65 px off: docs/benchmarks.md, "Tone readings that
+/// cannot decide").
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Rounding {
     /// The step between recorded levels (0: not rounded).
@@ -585,7 +585,7 @@ fn alternatives(
             fixed: Some(tone),
             ..gaussian
         };
-        let Some(fit) = encoded.minimise(in_light(tone, &base, true), false) else {
+        let Some(fit) = encoded.minimise(in_light(tone, &base), false) else {
             continue;
         };
         found[k] = Some(Alternative {
@@ -615,20 +615,19 @@ fn gaussian_start(bins: &[[f64; 4]], point: &[f64; UNKNOWNS], spread: f64) -> [f
     start
 }
 
-/// The unknowns of a linear fit `point` taken to the light of `tone`,
-/// to first order about the mid level (a start for that encoding's fit:
-/// from the mean level alone its centre wandered 11 px off on a blurred
-/// noisy edge); of a Gaussian fit (`gaussian`), its `ln s` kept.
-fn in_light(tone: Tone, point: &[f64; UNKNOWNS], gaussian: bool) -> [f64; UNKNOWNS] {
+/// The unknowns of a linear Gaussian fit `point` ([`ProfileFit::gaussian`])
+/// taken to the light of `tone`, to first order about the mid level: the
+/// level, half contrast and slopes scaled, `ln s` and the centre kept (a
+/// start for that encoding's fit: from the mean level alone, an
+/// encoding's centre wandered 11 px off on a blurred noisy edge).
+fn in_light(tone: Tone, point: &[f64; UNKNOWNS]) -> [f64; UNKNOWNS] {
     let mid = point[0].clamp(0.01, 0.99);
     let step = 1e-4;
     let slope = (tone.to_linear(mid + step) - tone.to_linear(mid - step)) / (2.0 * step);
     let mut light = *point;
     light[0] = tone.to_linear(mid).max(LIGHT_FLOOR);
-    for (k, w) in light.iter_mut().enumerate().take(R0).skip(1) {
-        if !(gaussian && k == 2) {
-            *w *= slope;
-        }
+    for k in [1, SLOPES, SLOPES + 1] {
+        light[k] *= slope;
     }
     light
 }
