@@ -438,9 +438,12 @@ pub fn estimate(data: &[(f64, f64)], spread: f64, rounding: Rounding) -> Option<
     // profile still reads an encoding with the rounding allowed for;
     // else the rounded reading (linear light, the encodings it allows).
     // The rounded fit alone reads less of a true encoding, whose
-    // asymmetry is also in how its tails reach their plateaus.
-    let exactly = read(data, fit, spread, noise_floor);
-    let rounded = read(data, ProfileFit { dead: &dead, ..fit }, spread, noise_floor);
+    // asymmetry is also in how its tails reach their plateaus. The two
+    // readings are independent: made side by side.
+    let (exactly, rounded) = rayon::join(
+        || read(data, fit, spread, noise_floor),
+        || read(data, ProfileFit { dead: &dead, ..fit }, spread, noise_floor),
+    );
     match (exactly, rounded) {
         (Some(e), Some(r)) if !e.curve.is_identity() && !r.curve.is_identity() => Some(e),
         (e, None) => e,
@@ -769,7 +772,11 @@ impl ProfileFit<'_> {
         Some((min.point, min.eval.cost + within))
     }
 
-    /// The evaluation at `x`; `None` when it is not finite.
+    /// The evaluation at `x`; `None` when it is not finite. The sums skip
+    /// the unknowns whose derivative is 0 at a bin (the bumps beyond its
+    /// distance, those a Gaussian fit does not use, the fixed ones):
+    /// their terms add nothing, so every sum is what the dense products
+    /// give, bit for bit, for a fraction of them.
     fn eval(&self, x: &[f64; UNKNOWNS]) -> Option<Eval> {
         let mut e = Eval {
             cost: 0.0,
@@ -778,10 +785,13 @@ impl ProfileFit<'_> {
         };
         let gamma = x[LOG_GAMMA].exp();
         let mut j = [0.0; UNKNOWNS];
+        let mut active = [0usize; UNKNOWNS];
         for (&[n, r, sum, _], &dead) in self.bins.iter().zip(self.dead) {
             let t = (r - x[R0]) / self.h;
             let mut light = x[0];
             let mut slope = 0.0;
+            // The unknowns this bin's derivative may involve, in order.
+            let mut used = 1;
             if self.gaussian {
                 // `c erf(x / (sqrt 2 s))` of `c = x[1]`, `ln s = x[2]`.
                 let s = x[2].exp();
@@ -792,13 +802,29 @@ impl ProfileFit<'_> {
                 slope += x[1] * density / s;
                 j[1] = edge;
                 j[2] = -x[1] * density * z;
+                active[1..3].copy_from_slice(&[1, 2]);
+                used = 3;
             } else {
+                // A pair two spacings or more within the bin's distance
+                // has passed it (its edge response is +-1, its bumps 0);
+                // one two spacings or more beyond has not reached it (0,
+                // and so have all the farther ones).
+                let passed = t.signum();
                 for k in 0..BUMPS {
                     let kf = k as f64;
-                    let edge = bump_edge(t - kf) + bump_edge(t + kf) - 1.0;
+                    if kf >= t.abs() + 2.0 {
+                        break;
+                    }
+                    let edge = if kf <= t.abs() - 2.0 {
+                        passed
+                    } else {
+                        slope += x[1 + k] * (bump(t - kf) + bump(t + kf)) / self.h;
+                        bump_edge(t - kf) + bump_edge(t + kf) - 1.0
+                    };
                     light += x[1 + k] * edge;
-                    slope += x[1 + k] * (bump(t - kf) + bump(t + kf)) / self.h;
                     j[1 + k] = edge;
+                    active[used] = 1 + k;
+                    used += 1;
                 }
             }
             // The plateaus' slopes: `b x` and `d |x|` (smoothed over the
@@ -816,15 +842,23 @@ impl ProfileFit<'_> {
             };
             let dv = if light > LIGHT_FLOOR { dv } else { 0.0 };
             j[0] = dv;
-            for jk in &mut j[1..R0] {
-                *jk *= dv;
+            for &k in &active[1..used] {
+                j[k] *= dv;
             }
-            j[R0] = if self.free[0] { -dv * slope } else { 0.0 };
-            j[LOG_GAMMA] = if self.free[1] && self.fixed.is_none() {
-                -v * clamped.ln() / gamma
-            } else {
-                0.0
-            };
+            j[SLOPES] *= dv;
+            j[SLOPES + 1] *= dv;
+            active[used..used + 2].copy_from_slice(&[SLOPES, SLOPES + 1]);
+            used += 2;
+            if self.free[0] {
+                j[R0] = -dv * slope;
+                active[used] = R0;
+                used += 1;
+            }
+            if self.free[1] && self.fixed.is_none() {
+                j[LOG_GAMMA] = -v * clamped.ln() / gamma;
+                active[used] = LOG_GAMMA;
+                used += 1;
+            }
             let raw = v - sum / n;
             if raw.abs() <= dead && dead > 0.0 {
                 // Within the rounding: no cost, and no pull on the unknowns.
@@ -832,9 +866,10 @@ impl ProfileFit<'_> {
             }
             let res = raw - raw.signum() * dead;
             e.cost += n * res * res;
-            for a in 0..UNKNOWNS {
+            let active = &active[..used];
+            for (ia, &a) in active.iter().enumerate() {
                 e.gradient[a] += n * j[a] * res;
-                for b in 0..=a {
+                for &b in &active[..=ia] {
                     e.matrix[a][b] += n * j[a] * j[b];
                 }
             }
@@ -974,6 +1009,149 @@ mod tests {
             let e = estimate(&profile(Tone::Linear, p), spread, Rounding::default()).unwrap();
             assert_eq!(e.curve, Tone::Linear, "{e:?}");
             assert!((e.gamma - 1.0).abs() < 0.05, "{e:?}");
+        }
+    }
+
+    /// [`ProfileFit::eval`] with every unknown's products and every
+    /// pair's edge response computed (what it skips, it skips exactly).
+    fn dense_eval(fit: &ProfileFit, x: &[f64; UNKNOWNS]) -> Eval {
+        let mut e = Eval {
+            cost: 0.0,
+            gradient: [0.0; UNKNOWNS],
+            matrix: [[0.0; UNKNOWNS]; UNKNOWNS],
+        };
+        let gamma = x[LOG_GAMMA].exp();
+        for (&[n, r, sum, _], &dead) in fit.bins.iter().zip(fit.dead) {
+            let mut j = [0.0; UNKNOWNS];
+            let t = (r - x[R0]) / fit.h;
+            let (mut light, mut slope) = (x[0], 0.0);
+            if fit.gaussian {
+                let s = x[2].exp();
+                let z = (r - x[R0]) / s;
+                let edge = libm::erf(z / std::f64::consts::SQRT_2);
+                let density = 2.0 * (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+                light += x[1] * edge;
+                slope += x[1] * density / s;
+                j[1] = edge;
+                j[2] = -x[1] * density * z;
+            } else {
+                for k in 0..BUMPS {
+                    let kf = k as f64;
+                    let edge = bump_edge(t - kf) + bump_edge(t + kf) - 1.0;
+                    light += x[1 + k] * edge;
+                    slope += x[1 + k] * (bump(t - kf) + bump(t + kf)) / fit.h;
+                    j[1 + k] = edge;
+                }
+            }
+            let x_r = t * fit.h;
+            let sign = 2.0 * bump_edge(t) - 1.0;
+            light += x[SLOPES] * x_r + x[SLOPES + 1] * x_r * sign;
+            slope += x[SLOPES] + x[SLOPES + 1] * (sign + x_r * 2.0 * bump(t) / fit.h);
+            j[SLOPES] = x_r;
+            j[SLOPES + 1] = x_r * sign;
+            let clamped = light.max(LIGHT_FLOOR);
+            let (v, dv) = fit.fixed.unwrap_or(Tone::Gamma(gamma)).encode(clamped);
+            let dv = if light > LIGHT_FLOOR { dv } else { 0.0 };
+            j[0] = dv;
+            for jk in &mut j[1..R0] {
+                *jk *= dv;
+            }
+            j[R0] = if fit.free[0] { -dv * slope } else { 0.0 };
+            if fit.free[1] && fit.fixed.is_none() {
+                j[LOG_GAMMA] = -v * clamped.ln() / gamma;
+            }
+            let raw = v - sum / n;
+            if raw.abs() <= dead && dead > 0.0 {
+                continue;
+            }
+            let res = raw - raw.signum() * dead;
+            e.cost += n * res * res;
+            for a in 0..UNKNOWNS {
+                e.gradient[a] += n * j[a] * res;
+                for b in 0..=a {
+                    e.matrix[a][b] += n * j[a] * j[b];
+                    e.matrix[b][a] = e.matrix[a][b];
+                }
+            }
+        }
+        e
+    }
+
+    #[test]
+    fn the_sparse_evaluation_is_the_dense_one() {
+        let data = profile(Tone::Srgb, gaussian_edge);
+        let binned = Binned::with_width(&data, BIN_WIDTH);
+        let h = (band_half_width(1.2) - 1.0) / 14.0;
+        // Dead zones on every third bin, as a rounded profile has them.
+        let dead: Vec<f64> = (0..binned.bins.len())
+            .map(|k| if k % 3 == 0 { 2e-3 } else { 0.0 })
+            .collect();
+        let base = ProfileFit {
+            bins: &binned.bins,
+            h,
+            dead: &dead,
+            free: [true, true],
+            fixed: None,
+            gaussian: false,
+        };
+        let mut x = [0.0; UNKNOWNS];
+        x[0] = 0.45;
+        for (k, w) in x[1..=BUMPS].iter_mut().enumerate() {
+            let k = (k + 1) as f64;
+            *w = 0.3 / k - 0.01 * k;
+        }
+        x[SLOPES] = 2e-3;
+        x[SLOPES + 1] = -1e-3;
+        x[R0] = 0.37;
+        x[LOG_GAMMA] = 0.8f64.ln();
+        let mut gaussian = x;
+        gaussian[1] = -0.3;
+        gaussian[2] = 1.1f64.ln();
+        let fits = [
+            (base, x),
+            (
+                ProfileFit {
+                    free: [true, false],
+                    ..base
+                },
+                x,
+            ),
+            (
+                ProfileFit {
+                    free: [false, false],
+                    fixed: Some(Tone::Srgb),
+                    ..base
+                },
+                x,
+            ),
+            (
+                ProfileFit {
+                    gaussian: true,
+                    free: [true, false],
+                    ..base
+                },
+                gaussian,
+            ),
+            (
+                ProfileFit {
+                    gaussian: true,
+                    fixed: Some(Tone::Gamma(2.2)),
+                    ..base
+                },
+                gaussian,
+            ),
+        ];
+        for (fit, at) in fits {
+            let (sparse, dense) = (fit.eval(&at).unwrap(), dense_eval(&fit, &at));
+            assert!(sparse.cost > 0.0);
+            assert_eq!(sparse.cost.to_bits(), dense.cost.to_bits());
+            assert_eq!(
+                sparse.gradient.map(f64::to_bits),
+                dense.gradient.map(f64::to_bits)
+            );
+            for (a, b) in sparse.matrix.iter().zip(&dense.matrix) {
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+            }
         }
     }
 
