@@ -415,10 +415,23 @@ pub(crate) fn band_data(
 pub(crate) fn band_data_where(
     sampler: &Sampler,
     curve: &SplineCurve,
-    (half_width, thin): (f64, usize),
+    band: (f64, usize),
     max: usize,
     keep: impl Fn([f64; 2]) -> bool,
 ) -> Option<Vec<(f64, f64)>> {
+    let data = oriented_band_data_where(sampler, curve, band, max, keep)?;
+    Some(data.into_iter().map(|(r, f, _)| (r, f)).collect())
+}
+
+/// [`band_data_where`] with the curve's unit normal at each pixel's foot:
+/// `(r, f, normal)`, sorted by `r` (pixels of equal `r` in raster order).
+pub(crate) fn oriented_band_data_where(
+    sampler: &Sampler,
+    curve: &SplineCurve,
+    (half_width, thin): (f64, usize),
+    max: usize,
+    keep: impl Fn([f64; 2]) -> bool,
+) -> Option<Vec<(f64, f64, [f64; 2])>> {
     let basis = Basis::new(
         1,
         if curve.is_closed() { 2 } else { 1 },
@@ -442,11 +455,15 @@ pub(crate) fn band_data_where(
     // The band's pixels are pixel centres in the image: their recorded
     // values (what the interpolant returns there).
     let stride = band.len().div_ceil(max).max(1);
-    let mut data: Vec<(f64, f64)> = band
+    let mut data: Vec<(f64, f64, [f64; 2])> = band
         .iter()
         .step_by(stride)
-        .filter(|&&(p, _)| keep(p))
-        .filter_map(|&(p, r)| sampler.pixel(p[0] as usize, p[1] as usize).map(|f| (r, f)))
+        .filter(|&&(p, _, _)| keep(p))
+        .filter_map(|&(p, r, n)| {
+            sampler
+                .pixel(p[0] as usize, p[1] as usize)
+                .map(|f| (r, f, n))
+        })
         .collect();
     data.sort_by(|a, b| a.0.total_cmp(&b.0));
     Some(data)

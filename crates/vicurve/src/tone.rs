@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::psf::{noise_variance, Binned};
 use crate::solver::lm::{self, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
+use crate::virtual_image::pixel_edge::{optical_blur, pixel_edge_cdf_ds};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -333,6 +334,12 @@ pub fn band_half_width(spread: f64) -> f64 {
     4.0 * spread.max(0.5) + 2.0
 }
 
+/// The spacing of the profile fit's bumps for an edge of spread `spread`
+/// (pixels): they reach a pixel short of the band ([`band_half_width`]).
+fn bump_spacing(spread: f64) -> f64 {
+    (band_half_width(spread) - 1.0) / 14.0
+}
+
 /// How an image's gray levels were rounded: to steps of `quantum` (gray
 /// levels on `[0, 1]`; 0 for floating-point data), under a noise of
 /// standard deviation `noise` (gray levels, [`crate::interp::Sampler::pixel_noise`]).
@@ -407,6 +414,42 @@ impl Rounding {
 /// `None` when the data cannot say: gray levels outside `[0, 1]`, fewer
 /// than 200 pixels, no contrast, or a fit that does not converge.
 pub fn estimate(data: &[(f64, f64)], spread: f64, rounding: Rounding) -> Option<ToneEstimate> {
+    estimate_in(data, None, spread, rounding)
+}
+
+/// [`estimate`] of the band's pixels `data` (`(r, v, normal)`: the
+/// curve's unit normal at each pixel's foot besides), whose encodings are
+/// weighed ([`ToneEstimate::alternatives`]) on a Gaussian blur of the
+/// square pixels across the edge at their orientation, as the
+/// measurement's pixel edge models them
+/// ([`crate::virtual_image::pixel_edge::pixel_edge_cdf`]).
+///
+/// Why: where the blur is not wide against the pixel, the pixel's square
+/// shapes the profile, and a Gaussian of the whole spread misfits it. On
+/// a sharp linear edge under 2 or 5 % noise the encodings then fitted
+/// about as well as linear light, their edges 0.15 px away, and the
+/// conformance sweep's sharp linear silhouettes reported a `sigma_shift`
+/// of 0.07 to 0.16 px for biases under 7e-3 px; on square pixels, sRGB
+/// fits such an edge worse by hundreds of noise variances (test
+/// `tone::tests::square_pixels_rule_the_encodings_out_of_a_sharp_linear_edge`).
+pub(crate) fn estimate_oriented(
+    data: &[(f64, f64, [f64; 2])],
+    spread: f64,
+    rounding: Rounding,
+) -> Option<ToneEstimate> {
+    let plain: Vec<(f64, f64)> = data.iter().map(|&(r, v, _)| (r, v)).collect();
+    let oriented = Oriented::new(data, rounding, bump_spacing(spread));
+    estimate_in(&plain, Some(&oriented), spread, rounding)
+}
+
+/// [`estimate`], its encodings weighed on the pixels' orientations when
+/// `oriented` is given.
+fn estimate_in(
+    data: &[(f64, f64)],
+    oriented: Option<&Oriented>,
+    spread: f64,
+    rounding: Rounding,
+) -> Option<ToneEstimate> {
     if data.len() < 200
         || data
             .iter()
@@ -415,7 +458,7 @@ pub fn estimate(data: &[(f64, f64)], spread: f64, rounding: Rounding) -> Option<
         return None;
     }
     let binned = Binned::with_width(data, BIN_WIDTH);
-    let h = (band_half_width(spread) - 1.0) / 14.0;
+    let h = bump_spacing(spread);
     let exact = vec![0.0; binned.bins.len()];
     let fit = ProfileFit {
         bins: &binned.bins,
@@ -424,6 +467,8 @@ pub fn estimate(data: &[(f64, f64)], spread: f64, rounding: Rounding) -> Option<
         free: [false, false],
         fixed: None,
         gaussian: false,
+        oriented,
+        normals: &[],
     };
     let dead = rounding.dead_zones(&binned.bins, h);
     // The image's own noise (trimmed of edges and clutter), when it
@@ -537,50 +582,59 @@ fn read(
 
 /// Each standard encoding as an [`Alternative`] to linear light, both
 /// fitted to the profile with a Gaussian blur (the measurement's own
-/// model of the edge, `fit` with `gaussian` set) from the linear fit
-/// `linear` (its unknowns, for the centre and levels, and its residual
-/// sum of squares) and the edge's `spread` (pixels); `noise`: the noise
-/// variance of the evidence, or the Gaussian linear fit's residual
-/// variance where it misfits more. None when the Gaussian fits the
-/// profile clearly worse than the bumps (by the evidence an encoding
-/// needs). The power laws are fitted only when sRGB fits less than
-/// [`RULED_OUT`] noise variances worse than linear light (they bend the
-/// levels almost alike).
+/// model of the edge, `fit` with `gaussian` set; of the square pixels at
+/// their orientation when `fit` has them, [`Oriented`]) from the linear
+/// fit `linear` (its unknowns, for the centre and levels, and its
+/// residual sum of squares) and the edge's `spread` (pixels); `noise`:
+/// the noise variance of the evidence, or the Gaussian linear fit's
+/// residual variance where it misfits more. None when the Gaussian, in
+/// the light that fits it best, fits the profile clearly worse than the
+/// bumps in linear light (by the evidence an encoding needs). The power
+/// laws are fitted only when sRGB fits less than [`RULED_OUT`] noise
+/// variances worse than linear light (they bend the levels almost
+/// alike).
 ///
 /// Why a Gaussian blur: the bumps follow any symmetric blur, and with
 /// them an encoding fits a linear edge's profile nearly as well as linear
 /// light, its centre moved (a linear disc under 5 % noise allowed sRGB
 /// with its edge 1.8 px away); the measurement itself takes the blur as
-/// Gaussian, and so does an encoding's alternative edge.
+/// Gaussian, and so does an encoding's alternative edge. Why the best
+/// light: an encoded edge's profile misfits a Gaussian in linear light by
+/// its encoding too, which says nothing against the blur.
 fn alternatives(
     fit: ProfileFit,
     (point, linear, spread): (&[f64; UNKNOWNS], f64, f64),
     noise: f64,
 ) -> [Option<Alternative>; 3] {
     let mut found = [None; 3];
-    let gaussian = ProfileFit {
+    let mut gaussian = ProfileFit {
         gaussian: true,
         free: [true, false],
         fixed: None,
         ..fit
     };
-    let Some((base, rss)) = gaussian.minimise(gaussian_start(fit.bins, point, spread), false)
-    else {
+    // The optical blur when the pixels' squares are modelled, else the
+    // whole spread.
+    let mut blur = spread;
+    if let Some(o) = fit.oriented {
+        let rounded = fit.dead.iter().any(|d| *d > 0.0);
+        gaussian.bins = &o.bins;
+        gaussian.normals = &o.normals;
+        gaussian.dead = if rounded { &o.dead } else { &o.exact };
+        blur = optical_blur(spread).max(MIN_START_BLUR);
+    }
+    let start = gaussian_start(fit.bins, point, blur);
+    let Some((base, rss)) = gaussian.minimise(start, false) else {
         return found;
     };
     let pixels: f64 = fit.bins.iter().map(|b| b[0]).sum();
-    // A blur that is not Gaussian (a defocus, the paper's profile): the
-    // encodings' distortions would be fitting its shape, not the light.
-    let dof = pixels - UNKNOWNS as f64;
-    if rss - linear > EVIDENCE.max(MISFIT_SHARE * dof) * noise {
-        return found;
-    }
     let noise = noise.max(rss / (pixels - 6.0).max(1.0));
+    let mut fits = [None; 3];
     for (k, &tone) in STANDARD_TONES.iter().enumerate() {
-        let ruled_out = found[..k]
+        let ruled_out = fits[..k]
             .iter()
             .flatten()
-            .any(|a: &Alternative| a.excess > RULED_OUT);
+            .any(|f: &([f64; UNKNOWNS], f64)| f.1 - rss > RULED_OUT * noise);
         if ruled_out {
             break;
         }
@@ -588,21 +642,33 @@ fn alternatives(
             fixed: Some(tone),
             ..gaussian
         };
-        let Some(fit) = encoded.minimise(in_light(tone, &base), false) else {
-            continue;
-        };
-        found[k] = Some(Alternative {
-            tone,
-            excess: (fit.1 - rss) / noise,
-            centre: fit.0[R0] - base[R0],
-        });
+        fits[k] = encoded.minimise(in_light(tone, &base), false);
+    }
+    // A blur that is not Gaussian (a defocus, the paper's profile): the
+    // encodings' distortions would be fitting its shape, not the light.
+    // Judged on the light that fits it best: an encoded edge's profile
+    // misfits a Gaussian in linear light by its encoding.
+    let best = fits.iter().flatten().map(|f| f.1).fold(rss, f64::min);
+    let dof = pixels - UNKNOWNS as f64;
+    if best - linear > EVIDENCE.max(MISFIT_SHARE * dof) * noise {
+        return found;
+    }
+    for (k, fit) in fits.iter().enumerate() {
+        if let Some(fit) = fit {
+            found[k] = Some(Alternative {
+                tone: STANDARD_TONES[k],
+                excess: (fit.1 - rss) / noise,
+                centre: fit.0[R0] - base[R0],
+            });
+        }
     }
     found
 }
 
 /// The start of a Gaussian fit ([`ProfileFit::gaussian`]): the bumps'
 /// fit `point`'s mid level and centre, half the difference of the
-/// profile's two ends (a tenth of its bins each) and the edge's `spread`.
+/// profile's two ends (a tenth of `bins`, the profile's, each) and the
+/// blur `spread`.
 fn gaussian_start(bins: &[[f64; 4]], point: &[f64; UNKNOWNS], spread: f64) -> [f64; UNKNOWNS] {
     let tenth = (bins.len() / 10).max(1);
     let mean = |b: &[[f64; 4]]| {
@@ -731,8 +797,64 @@ struct ProfileFit<'a> {
     fixed: Option<Tone>,
     /// A Gaussian blur instead of the bumps: the unknowns 1 and 2 are the
     /// half contrast `c` and `ln s` of `c erf(x / (sqrt 2 s))`, the other
-    /// bumps' weights unused (0).
+    /// bumps' weights unused (0); with `bins` an [`Oriented`]'s, that
+    /// Gaussian blurs each bin's square pixels at their orientation.
     gaussian: bool,
+    /// The band's pixels binned by orientation too, for the Gaussian fits
+    /// of [`alternatives`] (none: the plain Gaussian on `bins`).
+    oriented: Option<&'a Oriented>,
+    /// Each bin's normal when `bins` are an [`Oriented`]'s (else empty).
+    normals: &'a [[f64; 2]],
+}
+
+/// Orientation classes of the pixels' normals, folded into `[0, pi/4]`
+/// (a square pixel's extent across an edge depends on no more).
+const ORIENTATIONS: usize = 4;
+/// The smallest optical blur a Gaussian fit of square pixels starts from,
+/// pixels (a sharper one looks the same).
+const MIN_START_BLUR: f64 = 0.05;
+
+/// The band's pixels binned by the orientation of their normal
+/// ([`ORIENTATIONS`] classes, each binned by distance like the profile),
+/// with each bin's class normal (the class's mean folded angle) and its
+/// rounding's dead zone ([`Rounding::dead_zones`]; `exact`: none).
+struct Oriented {
+    bins: Vec<[f64; 4]>,
+    normals: Vec<[f64; 2]>,
+    dead: Vec<f64>,
+    exact: Vec<f64>,
+}
+
+impl Oriented {
+    /// The classes of `data` (sorted by `r`); `reach` is the bumps'
+    /// spacing (pixels) for the dead zones.
+    fn new(data: &[(f64, f64, [f64; 2])], rounding: Rounding, reach: f64) -> Oriented {
+        let mut classes: Vec<(Vec<(f64, f64)>, f64)> = vec![(Vec::new(), 0.0); ORIENTATIONS];
+        let step = std::f64::consts::FRAC_PI_4 / ORIENTATIONS as f64;
+        for &(r, v, [nx, ny]) in data {
+            let (lo, hi) = (nx.abs().min(ny.abs()), nx.abs().max(ny.abs()));
+            let angle = lo.atan2(hi);
+            let k = ((angle / step) as usize).min(ORIENTATIONS - 1);
+            classes[k].0.push((r, v));
+            classes[k].1 += angle;
+        }
+        let mut o = Oriented {
+            bins: Vec::new(),
+            normals: Vec::new(),
+            dead: Vec::new(),
+            exact: Vec::new(),
+        };
+        for (pixels, angles) in classes.iter().filter(|c| !c.0.is_empty()) {
+            let mean = angles / pixels.len() as f64;
+            let bins = Binned::with_width(pixels, BIN_WIDTH).bins;
+            o.dead.extend(rounding.dead_zones(&bins, reach));
+            o.normals
+                .extend(std::iter::repeat_n([mean.cos(), mean.sin()], bins.len()));
+            o.bins.extend(bins);
+        }
+        o.exact = vec![0.0; o.bins.len()];
+        o
+    }
 }
 
 /// A point of the fit: its residual sum of squares (the bins' means
@@ -786,13 +908,25 @@ impl ProfileFit<'_> {
         let gamma = x[LOG_GAMMA].exp();
         let mut j = [0.0; UNKNOWNS];
         let mut active = [0usize; UNKNOWNS];
-        for (&[n, r, sum, _], &dead) in self.bins.iter().zip(self.dead) {
+        let normals = if self.gaussian { self.normals } else { &[] };
+        for (i, (&[n, r, sum, _], &dead)) in self.bins.iter().zip(self.dead).enumerate() {
             let t = (r - x[R0]) / self.h;
             let mut light = x[0];
             let mut slope = 0.0;
             // The unknowns this bin's derivative may involve, in order.
             let mut used = 1;
-            if self.gaussian {
+            if let (true, Some(&[nx, ny])) = (self.gaussian, normals.get(i)) {
+                // `c (2 P - 1)`, `P` the blurred square pixel's
+                // distribution across the edge, `c = x[1]`, `ln s = x[2]`.
+                let s = x[2].exp();
+                let (cdf, pdf, ds) = pixel_edge_cdf_ds(r - x[R0], nx, ny, s);
+                light += x[1] * (2.0 * cdf - 1.0);
+                slope += x[1] * 2.0 * pdf;
+                j[1] = 2.0 * cdf - 1.0;
+                j[2] = x[1] * 2.0 * ds * s;
+                active[1..3].copy_from_slice(&[1, 2]);
+                used = 3;
+            } else if self.gaussian {
                 // `c erf(x / (sqrt 2 s))` of `c = x[1]`, `ln s = x[2]`.
                 let s = x[2].exp();
                 let z = (r - x[R0]) / s;
@@ -1081,7 +1215,7 @@ mod tests {
     fn the_sparse_evaluation_is_the_dense_one() {
         let data = profile(Tone::Srgb, gaussian_edge);
         let binned = Binned::with_width(&data, BIN_WIDTH);
-        let h = (band_half_width(1.2) - 1.0) / 14.0;
+        let h = bump_spacing(1.2);
         // Dead zones on every third bin, as a rounded profile has them.
         let dead: Vec<f64> = (0..binned.bins.len())
             .map(|k| if k % 3 == 0 { 2e-3 } else { 0.0 })
@@ -1093,6 +1227,8 @@ mod tests {
             free: [true, true],
             fixed: None,
             gaussian: false,
+            oriented: None,
+            normals: &[],
         };
         let mut x = [0.0; UNKNOWNS];
         x[0] = 0.45;
@@ -1153,6 +1289,71 @@ mod tests {
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
             }
         }
+    }
+
+    /// `(r, v, normal)` of the pixels within `reach` px of a disc of
+    /// radius 60 px, sorted by `r`: each pixel's share of 16 x 16
+    /// sub-pixels inside (a sharp edge) from 0.2 to 0.8 in linear light,
+    /// plus Gaussian noise of `noise` (a fixed pseudo-random sequence),
+    /// rounded to 8 bits.
+    fn sharp_disc(noise: f64, reach: f64) -> Vec<(f64, f64, [f64; 2])> {
+        let (cx, cy, radius) = (80.3, 79.6, 60.0);
+        let mut state = 987654321u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let mut data = Vec::new();
+        for y in 0..161 {
+            for x in 0..161 {
+                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+                let rho = dx.hypot(dy);
+                if (rho - radius).abs() > reach {
+                    continue;
+                }
+                let inside = (0..256)
+                    .filter(|k| {
+                        let sx = dx + ((k % 16) as f64 + 0.5) / 16.0 - 0.5;
+                        let sy = dy + ((k / 16) as f64 + 0.5) / 16.0 - 0.5;
+                        sx.hypot(sy) < radius
+                    })
+                    .count() as f64
+                    / 256.0;
+                let gauss =
+                    (-2.0 * uniform().ln()).sqrt() * (2.0 * std::f64::consts::PI * uniform()).cos();
+                let v = (0.2 + 0.6 * inside + noise * gauss).clamp(0.0, 1.0);
+                let v = (v * 255.0).round() / 255.0;
+                data.push((rho - radius, v, [dx / rho, dy / rho]));
+            }
+        }
+        data.sort_by(|a, b| a.0.total_cmp(&b.0));
+        data
+    }
+
+    /// A sharp linear edge under 2 % noise: a Gaussian of the whole
+    /// spread misfits its square pixels, and let sRGB fit almost as well
+    /// with the edge 0.15 px away (the conformance sweep's sharp discs
+    /// reported a `sigma_shift` of 0.14 px); on square pixels blurred by
+    /// a Gaussian at their orientation, the encodings are ruled out.
+    #[test]
+    fn square_pixels_rule_the_encodings_out_of_a_sharp_linear_edge() {
+        let spread = 0.3;
+        let noise = 0.02 * 0.6;
+        let data = sharp_disc(noise, band_half_width(spread) + 1.0);
+        let rounding = Rounding {
+            quantum: 1.0 / 255.0,
+            noise,
+        };
+        let oriented = estimate_oriented(&data, spread, rounding).unwrap();
+        let plain: Vec<(f64, f64)> = data.iter().map(|&(r, v, _)| (r, v)).collect();
+        let gaussian = estimate(&plain, spread, rounding).unwrap();
+        println!("oriented {oriented:?}\nplain {gaussian:?}");
+        assert_eq!(oriented.curve, Tone::Linear);
+        assert_eq!(gaussian.curve, Tone::Linear);
+        assert!(oriented.position_sd < 0.01, "{oriented:?}");
+        assert!(gaussian.position_sd > 0.05, "{gaussian:?}");
     }
 
     #[test]

@@ -117,6 +117,11 @@ impl<'a> Pixels<'a> {
     }
 }
 
+/// A band pixel as [`Band::distances`] gives it: its centre, its signed
+/// distance `r` to the curve (pixels) and the curve's unit normal at its
+/// foot.
+pub(crate) type Distance = ([f64; 2], f64, [f64; 2]);
+
 /// Where a backend puts a pixel: its centre, coordinates `s` and `r`
 /// (pixels), the normal and the curvature (1/px) of the curve at `s`.
 pub(super) struct Foot {
@@ -299,7 +304,7 @@ impl Band {
         curve: &SplineCurve,
         basis: &Basis,
         params: &BandParams,
-    ) -> Result<Vec<([f64; 2], f64)>> {
+    ) -> Result<Vec<Distance>> {
         params.check()?;
         let reach = params.half_width + params.margin;
         let pixels = Pixels::asked(curve, basis, params, None);
@@ -316,7 +321,11 @@ impl Band {
                 pixels
                     .levelset_rows(&levelsets)
                     .into_iter()
-                    .map(|row| row.into_iter().map(|c| (c.foot.pos, c.foot.r)).collect())
+                    .map(|row| {
+                        row.into_iter()
+                            .map(|c| (c.foot.pos, c.foot.r, c.foot.normal))
+                            .collect()
+                    })
                     .collect()
             }
         };

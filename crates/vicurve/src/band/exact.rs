@@ -3,7 +3,7 @@
 //! (`raster`), Newton's method on the exact curve refines it
 //! ([`crate::curve::SplineCurve::project`]).
 
-use super::build::{Candidate, Foot, Pixels};
+use super::build::{Candidate, Distance, Foot, Pixels};
 use super::raster::{unpack, Chords, GridShape};
 use super::{BandScratch, MIN_JACOBIAN};
 use crate::curve::Clearance;
@@ -20,13 +20,14 @@ impl Pixels<'_> {
         self.exact_with(scratch, |cell, c| self.project_cell(cell, c))
     }
 
-    /// The centre and signed distance `r` (pixels) of each pixel of
-    /// [`Pixels::exact_rows`], row by row, without what else a band stores
-    /// of it (its basis and profile values).
-    pub(super) fn exact_distances(&self, scratch: &mut BandScratch) -> Vec<Vec<([f64; 2], f64)>> {
+    /// The centre, signed distance `r` (pixels) and the curve's unit
+    /// normal at the foot of each pixel of [`Pixels::exact_rows`], row by
+    /// row, without what else a band stores of it (its basis and profile
+    /// values).
+    pub(super) fn exact_distances(&self, scratch: &mut BandScratch) -> Vec<Vec<Distance>> {
         self.exact_with(scratch, |cell, c| {
             self.foot_of_cell(cell, c)
-                .map(|(foot, _)| (foot.pos, foot.r))
+                .map(|(foot, _)| (foot.pos, foot.r, foot.normal))
         })
     }
 

@@ -539,7 +539,17 @@ mod tests {
                 .zip(band.r())
                 .map(|(p, r)| (*p, *r))
                 .collect();
-            assert_eq!(distances, want, "{coords:?}");
+            let got: Vec<([f64; 2], f64)> = distances.iter().map(|d| (d.0, d.1)).collect();
+            assert_eq!(got, want, "{coords:?}");
+            // With exact coordinates, the normal at each foot (the band's
+            // `s`) is the unit vector from it to the pixel.
+            if matches!(coords, Coords::Exact) {
+                for ((p, r, n), &s) in distances.into_iter().zip(band.s()) {
+                    assert!(((n[0] * n[0] + n[1] * n[1]) - 1.0).abs() < 1e-12);
+                    let back = [p[0] - r * n[0], p[1] - r * n[1]];
+                    assert!(crate::curve::dist(back, curve.point(s)) < 1e-6, "{p:?}");
+                }
+            }
         }
     }
 }

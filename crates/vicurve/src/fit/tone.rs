@@ -104,10 +104,11 @@ fn estimate(sampler: &Sampler, curve: &SplineCurve, spread: f64) -> Option<ToneE
         x if x > 1.0 => 2,
         _ => 1,
     };
-    let data = psf::band_data_where(sampler, &stretch, (half_width, thin), TONE_PIXELS, keep)?;
+    let data =
+        psf::oriented_band_data_where(sampler, &stretch, (half_width, thin), TONE_PIXELS, keep)?;
     let rounding = tone::Rounding {
         quantum: sampler.quantum().unwrap_or(0.0),
         noise: sampler.pixel_noise(),
     };
-    tone::estimate(&data, spread, rounding)
+    tone::estimate_oriented(&data, spread, rounding)
 }

@@ -264,26 +264,73 @@ const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 /// `1e-9 (1 + sigma_b^2)` of the direct formula (tested).
 #[inline]
 pub fn pixel_edge_cdf(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
+    let (x, s, area) = match corners(t, nx, ny, sigma_b) {
+        Ok(c) => c,
+        Err(level) => return (level, 0.0),
+    };
+    let psi = super::psi::Psi::get();
+    let (p2a, p1a) = psi.at(x[0]);
+    let (p2b, p1b) = psi.at(x[1]);
+    let (p2c, p1c) = psi.at(x[2]);
+    let (p2d, p1d) = psi.at(x[3]);
+    let cdf = ((p2a - p2b) - (p2c - p2d)) * s * s * area;
+    let pdf = ((p1a - p1b) - (p1c - p1d)) * s * area;
+    (cdf.clamp(0.0, 1.0), pdf.max(0.0))
+}
+
+/// [`pixel_edge_cdf`] and the derivative of its distribution in
+/// `sigma_b` (from the same table values: the distribution is `s^2` times
+/// a sum of `Psi2((t + o) / s)`, whose derivative in `x` is `Psi1`); the
+/// floor the pixel's widths take from the blur is held fixed. For fits of
+/// the blur ([`crate::tone`]'s alternatives).
+#[inline]
+pub(crate) fn pixel_edge_cdf_ds(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64, f64) {
+    let (x, s, area) = match corners(t, nx, ny, sigma_b) {
+        Ok(c) => c,
+        Err(level) => return (level, 0.0, 0.0),
+    };
+    let psi = super::psi::Psi::get();
+    let (mut p2, mut p1, mut moment) = (0.0, 0.0, 0.0);
+    for (x, sign) in x.into_iter().zip([1.0, -1.0, -1.0, 1.0]) {
+        let (q2, q1) = psi.at(x);
+        p2 += sign * q2;
+        p1 += sign * q1;
+        moment += sign * x * q1;
+    }
+    let cdf = p2 * s * s * area;
+    let pdf = p1 * s * area;
+    let ds = if sigma_b > MIN_BLUR && (0.0..=1.0).contains(&cdf) {
+        (2.0 * p2 - moment) * s * area
+    } else {
+        0.0
+    };
+    (cdf.clamp(0.0, 1.0), pdf.max(0.0), ds)
+}
+
+/// The arguments `(t + o) / s` of the four corners of [`pixel_edge_cdf`]'s
+/// trapezoid (offsets `o` = outer, -inner, inner, -outer), its blur `s`
+/// (at least [`MIN_BLUR`]) and the pixel's inverse area; `Err` with the
+/// distribution (0 or 1) beyond the trapezoid's reach.
+#[inline]
+fn corners(t: f64, nx: f64, ny: f64, sigma_b: f64) -> Result<([f64; 4], f64, f64), f64> {
     let s = sigma_b.max(MIN_BLUR);
     let (a, b) = widths(nx, ny, s);
     let reach = 0.5 * (a + b) + 9.0 * s;
     if t >= reach {
-        return (1.0, 0.0);
+        return Err(1.0);
     }
     if t <= -reach {
-        return (0.0, 0.0);
+        return Err(0.0);
     }
     let inv = 1.0 / s;
     let (outer, inner) = (0.5 * (a + b), 0.5 * (a - b));
-    let psi = super::psi::Psi::get();
-    let (p2a, p1a) = psi.at((t + outer) * inv);
-    let (p2b, p1b) = psi.at((t - inner) * inv);
-    let (p2c, p1c) = psi.at((t + inner) * inv);
-    let (p2d, p1d) = psi.at((t - outer) * inv);
-    let area = 1.0 / (a * b);
-    let cdf = ((p2a - p2b) - (p2c - p2d)) * s * s * area;
-    let pdf = ((p1a - p1b) - (p1c - p1d)) * s * area;
-    (cdf.clamp(0.0, 1.0), pdf.max(0.0))
+    let x = [
+        (t + outer) * inv,
+        (t - inner) * inv,
+        (t + inner) * inv,
+        (t - outer) * inv,
+    ];
+    Ok((x, s, 1.0 / (a * b)))
 }
 
 /// [`pixel_edge_cdf`] computed directly, `Phi` and `phi` at each corner:
@@ -319,6 +366,31 @@ fn pixel_edge_cdf_direct(t: f64, nx: f64, ny: f64, sigma_b: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+    /// [`super::pixel_edge_cdf_ds`]: the distribution and density of
+    /// [`super::pixel_edge_cdf`], and the derivative in the blur that
+    /// central differences of it give.
+    #[test]
+    fn the_blurs_derivative_is_the_distributions_slope() {
+        for &(nx, ny) in &[(1.0, 0.0), (0.8, 0.6), (0.3f64, 0.9539392014169457)] {
+            for &blur in &[0.05, 0.3, 1.0, 2.5] {
+                for k in -40..=40 {
+                    let t = k as f64 * 0.1 * (blur + 0.5);
+                    let (cdf, pdf, ds) = super::pixel_edge_cdf_ds(t, nx, ny, blur);
+                    let (c0, p0) = super::pixel_edge_cdf(t, nx, ny, blur);
+                    assert!((cdf - c0).abs() < 1e-12 && (pdf - p0).abs() < 1e-12);
+                    let h = 1e-5 * blur;
+                    let numeric = (super::pixel_edge_cdf(t, nx, ny, blur + h).0
+                        - super::pixel_edge_cdf(t, nx, ny, blur - h).0)
+                        / (2.0 * h);
+                    assert!(
+                        (ds - numeric).abs() < 1e-4 * (1.0 + numeric.abs()),
+                        "({nx}, {ny}) blur {blur} t {t}: {ds} {numeric}"
+                    );
+                }
+            }
+        }
+    }
+
     /// The level of a disc blurred by a Gaussian, from its exact integral
     /// (Simpson, radially and for the Bessel function), against
     /// `curved_edge` with the same spread variance (a diagonal normal, so
