@@ -467,7 +467,6 @@ fn estimate_in(
         free: [false, false],
         fixed: None,
         gaussian: false,
-        oriented,
         normals: &[],
     };
     let dead = rounding.dead_zones(&binned.bins, h);
@@ -476,8 +475,9 @@ fn estimate_in(
     // when it holds the edge alone.
     let quantum = rounding.quantum;
     let noise_floor = Some(rounding.noise * rounding.noise).filter(|n| *n > quantum * quantum);
+    let squares = |rounded| oriented.map(|o| o.squares(rounded));
     if dead.iter().all(|d| *d == 0.0) {
-        return read(data, fit, spread, noise_floor);
+        return read(data, fit, spread, (noise_floor, squares(false)));
     }
     // A noiseless image's rounding: its reading is kept only when the
     // profile still reads an encoding with the rounding allowed for;
@@ -486,8 +486,11 @@ fn estimate_in(
     // asymmetry is also in how its tails reach their plateaus. The two
     // readings are independent: made side by side.
     let (exactly, rounded) = rayon::join(
-        || read(data, fit, spread, noise_floor),
-        || read(data, ProfileFit { dead: &dead, ..fit }, spread, noise_floor),
+        || read(data, fit, spread, (noise_floor, squares(false))),
+        || {
+            let rounded = ProfileFit { dead: &dead, ..fit };
+            read(data, rounded, spread, (noise_floor, squares(true)))
+        },
     );
     match (exactly, rounded) {
         (Some(e), Some(r)) if !e.curve.is_identity() && !r.curve.is_identity() => Some(e),
@@ -498,12 +501,14 @@ fn estimate_in(
 
 /// [`estimate`] on the binned profile of `fit` (`dead` set), from the
 /// band's pixels `data`; `noise_floor`: the image's noise variance when
-/// it exceeds a quantum's square (gray levels squared).
+/// it exceeds a quantum's square (gray levels squared); `squares`: the
+/// pixels binned by orientation, with the same rounding, that the
+/// encodings are weighed on (none: the plain Gaussian on `fit`'s bins).
 fn read(
     data: &[(f64, f64)],
     fit: ProfileFit,
     spread: f64,
-    noise_floor: Option<f64>,
+    (noise_floor, squares): (Option<f64>, Option<Squares>),
 ) -> Option<ToneEstimate> {
     let mean = data.iter().map(|d| d.1).sum::<f64>() / data.len() as f64;
     let mut start = [0.0; UNKNOWNS];
@@ -555,7 +560,7 @@ fn read(
         let alternatives = if cluttered {
             [None; 3]
         } else {
-            alternatives(fit, (&linear.0, linear.1, spread), noise)
+            alternatives(fit, squares, (&linear.0, linear.1, spread), noise)
         };
         let fitted = alternatives.iter().flatten().map(|a| (a.excess, a.centre));
         return Some(ToneEstimate {
@@ -603,6 +608,7 @@ fn read(
 /// its encoding too, which says nothing against the blur.
 fn alternatives(
     fit: ProfileFit,
+    squares: Option<Squares>,
     (point, linear, spread): (&[f64; UNKNOWNS], f64, f64),
     noise: f64,
 ) -> [Option<Alternative>; 3] {
@@ -616,11 +622,8 @@ fn alternatives(
     // The optical blur when the pixels' squares are modelled, else the
     // whole spread.
     let mut blur = spread;
-    if let Some(o) = fit.oriented {
-        let rounded = fit.dead.iter().any(|d| *d > 0.0);
-        gaussian.bins = &o.bins;
-        gaussian.normals = &o.normals;
-        gaussian.dead = if rounded { &o.dead } else { &o.exact };
+    if let Some(o) = squares {
+        (gaussian.bins, gaussian.normals, gaussian.dead) = (o.bins, o.normals, o.dead);
         blur = optical_blur(spread).max(MIN_START_BLUR);
     }
     let start = gaussian_start(fit.bins, point, blur);
@@ -800,9 +803,6 @@ struct ProfileFit<'a> {
     /// bumps' weights unused (0); with `bins` an [`Oriented`]'s, that
     /// Gaussian blurs each bin's square pixels at their orientation.
     gaussian: bool,
-    /// The band's pixels binned by orientation too, for the Gaussian fits
-    /// of [`alternatives`] (none: the plain Gaussian on `bins`).
-    oriented: Option<&'a Oriented>,
     /// Each bin's normal when `bins` are an [`Oriented`]'s (else empty).
     normals: &'a [[f64; 2]],
 }
@@ -855,6 +855,25 @@ impl Oriented {
         o.exact = vec![0.0; o.bins.len()];
         o
     }
+
+    /// The bins with their normals and, when `rounded`, their dead zones
+    /// (else none).
+    fn squares(&self, rounded: bool) -> Squares<'_> {
+        Squares {
+            bins: &self.bins,
+            normals: &self.normals,
+            dead: if rounded { &self.dead } else { &self.exact },
+        }
+    }
+}
+
+/// What the Gaussian fits of square pixels read of an [`Oriented`]: its
+/// bins, their normals and dead zones.
+#[derive(Clone, Copy)]
+struct Squares<'a> {
+    bins: &'a [[f64; 4]],
+    normals: &'a [[f64; 2]],
+    dead: &'a [f64],
 }
 
 /// A point of the fit: its residual sum of squares (the bins' means
@@ -1227,7 +1246,6 @@ mod tests {
             free: [true, true],
             fixed: None,
             gaussian: false,
-            oriented: None,
             normals: &[],
         };
         let mut x = [0.0; UNKNOWNS];
