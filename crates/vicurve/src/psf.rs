@@ -24,6 +24,7 @@ use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::spline::Basis;
 use crate::virtual_image::Kind;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The blur of an edge or a line as estimated by [`edge_spread`] or
@@ -465,7 +466,8 @@ pub(crate) fn oriented_band_data_where(
                 .map(|f| (r, f, n))
         })
         .collect();
-    data.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Stable, as `sort_by`: pixels of equal `r` stay in raster order.
+    data.par_sort_by(|a, b| a.0.total_cmp(&b.0));
     Some(data)
 }
 

@@ -20,6 +20,7 @@ use crate::psf::{noise_variance, Binned};
 use crate::solver::lm::{self, LmParams, Problem, Trial};
 use crate::solver::DenseCholesky;
 use crate::virtual_image::pixel_edge::{optical_blur, pixel_edge_cdf_ds};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -516,14 +517,25 @@ fn read(
     let with = |free, fixed| ProfileFit { free, fixed, ..fit };
     // The linear fit is the reference of the evidence: it must settle.
     let linear = with([true, false], None).minimise(start, true)?;
-    let power = with([true, true], None).minimise(linear.0, false)?;
+    let pixel_noise = noise_variance(data);
+    // A band whose neighbouring pixels differ by more than the image's
+    // noise holds more than the edge (clutter), which the encodings'
+    // distortions would be fitting.
+    let cluttered = noise_floor.is_some_and(|n| pixel_noise > MISFIT * n);
+    // The power law, and the Gaussian the encodings are weighed against
+    // should linear light be kept: both start from the linear fit, and
+    // neither needs the other, so they are fitted side by side.
+    let (power, gaussian) = rayon::join(
+        || with([true, true], None).minimise(linear.0, false),
+        || (!cluttered).then(|| GaussianBase::fit(fit, squares, &linear.0, spread)),
+    );
+    let power = power?;
     // The noise: that of neighbouring pixels, or the power law's own
     // residual variance where the profile misfits more (a blur the sum of
     // bumps cannot follow, the rounding of a noiseless image's levels,
     // another edge within the band): evidence is then counted against the
     // misfit, not against a quantisation step.
     let dof = (data.len() - UNKNOWNS) as f64;
-    let pixel_noise = noise_variance(data);
     let misfit = power.1 / dof;
     let noise = pixel_noise.max(misfit).max(1e-30);
     let point = power.0;
@@ -544,11 +556,8 @@ fn read(
     if !(evidence > needed && gamma > LEAST_GAMMA) {
         // Linear enough to keep; the standard encodings the profile still
         // allows (a faint, noisy or noiseless 8-bit edge can hardly tell
-        // them from linear light) say how far the edge may be.
-        // A band whose neighbouring pixels differ by more than the
-        // image's noise holds more than the edge (clutter), which the
-        // encodings' distortions would be fitting.
-        let cluttered = noise_floor.is_some_and(|n| pixel_noise > MISFIT * n);
+        // them from linear light) say how far the edge may be (none in a
+        // cluttered band).
         // A power law of an encoding's exponent the profile prefers, not
         // by enough to be chosen, leaves the edge where that law would put
         // it as likely as not, weighed or not.
@@ -557,10 +566,9 @@ fn read(
         } else {
             0.0
         };
-        let alternatives = if cluttered {
-            [None; 3]
-        } else {
-            alternatives(fit, squares, (&linear.0, linear.1, spread), noise)
+        let alternatives = match gaussian {
+            Some(base) => alternatives(fit, &base, linear.1, noise),
+            None => [None; 3],
         };
         let fitted = alternatives.iter().flatten().map(|a| (a.excess, a.centre));
         return Some(ToneEstimate {
@@ -586,13 +594,11 @@ fn read(
 }
 
 /// Each standard encoding as an [`Alternative`] to linear light, both
-/// fitted to the profile with a Gaussian blur (the measurement's own
-/// model of the edge, `fit` with `gaussian` set; of the square pixels at
-/// their orientation when `fit` has them, [`Oriented`]) from the linear
-/// fit `linear` (its unknowns, for the centre and levels, and its
-/// residual sum of squares) and the edge's `spread` (pixels); `noise`:
-/// the noise variance of the evidence, or the Gaussian linear fit's
-/// residual variance where it misfits more. None when the Gaussian, in
+/// fitted to the profile of `fit` with a Gaussian blur (`base`, the
+/// measurement's own model of the edge), from the residual sum of squares
+/// `linear` of the linear fit; `noise`: the noise variance of the
+/// evidence, or the Gaussian linear fit's residual variance where it
+/// misfits more. None when the Gaussian, in
 /// the light that fits it best, fits the profile clearly worse than the
 /// bumps in linear light (by the evidence an encoding needs). The power
 /// laws are fitted only when sRGB fits less than [`RULED_OUT`] noise
@@ -608,26 +614,13 @@ fn read(
 /// its encoding too, which says nothing against the blur.
 fn alternatives(
     fit: ProfileFit,
-    squares: Option<Squares>,
-    (point, linear, spread): (&[f64; UNKNOWNS], f64, f64),
+    base: &GaussianBase,
+    linear: f64,
     noise: f64,
 ) -> [Option<Alternative>; 3] {
     let mut found = [None; 3];
-    let mut gaussian = ProfileFit {
-        gaussian: true,
-        free: [true, false],
-        fixed: None,
-        ..fit
-    };
-    // The optical blur when the pixels' squares are modelled, else the
-    // whole spread.
-    let mut blur = spread;
-    if let Some(o) = squares {
-        (gaussian.bins, gaussian.normals, gaussian.dead) = (o.bins, o.normals, o.dead);
-        blur = optical_blur(spread).max(MIN_START_BLUR);
-    }
-    let start = gaussian_start(fit.bins, point, blur);
-    let Some((base, rss)) = gaussian.minimise(start, false) else {
+    let gaussian = base.fit;
+    let Some((base, rss)) = base.min else {
         return found;
     };
     let pixels: f64 = fit.bins.iter().map(|b| b[0]).sum();
@@ -666,6 +659,47 @@ fn alternatives(
         }
     }
     found
+}
+
+/// The Gaussian fit in linear light that [`alternatives`] weighs the
+/// encodings against: the fit (of the square pixels at their orientation
+/// when there are [`Squares`], [`Oriented`]; else of the profile's bins
+/// with a Gaussian of the whole spread) and its minimum (unknowns and
+/// residual sum of squares; none when it does not converge).
+struct GaussianBase<'a> {
+    fit: ProfileFit<'a>,
+    min: Option<([f64; UNKNOWNS], f64)>,
+}
+
+impl<'a> GaussianBase<'a> {
+    /// The Gaussian fit of `fit`'s profile (of `squares` when given) from
+    /// the linear fit's unknowns `point` (its centre and levels) and the
+    /// edge's `spread` (pixels).
+    fn fit(
+        fit: ProfileFit<'a>,
+        squares: Option<Squares<'a>>,
+        point: &[f64; UNKNOWNS],
+        spread: f64,
+    ) -> Self {
+        let mut gaussian = ProfileFit {
+            gaussian: true,
+            free: [true, false],
+            fixed: None,
+            ..fit
+        };
+        // The optical blur when the pixels' squares are modelled, else the
+        // whole spread.
+        let mut blur = spread;
+        if let Some(o) = squares {
+            (gaussian.bins, gaussian.normals, gaussian.dead) = (o.bins, o.normals, o.dead);
+            blur = optical_blur(spread).max(MIN_START_BLUR);
+        }
+        let start = gaussian_start(fit.bins, point, blur);
+        GaussianBase {
+            fit: gaussian,
+            min: gaussian.minimise(start, false),
+        }
+    }
 }
 
 /// The start of a Gaussian fit ([`ProfileFit::gaussian`]): the bumps'
@@ -709,7 +743,7 @@ fn in_light(tone: Tone, point: &[f64; UNKNOWNS]) -> [f64; UNKNOWNS] {
 /// power law `power` (its unknowns and residual sum of squares) and the
 /// fits `with` makes of each standard encoding from `start`.
 fn choose<'a>(
-    with: impl Fn([bool; 2], Option<Tone>) -> ProfileFit<'a>,
+    with: impl Fn([bool; 2], Option<Tone>) -> ProfileFit<'a> + Sync,
     start: [f64; UNKNOWNS],
     (point, rss): ([f64; UNKNOWNS], f64),
     noise: f64,
@@ -717,15 +751,15 @@ fn choose<'a>(
 ) -> (Tone, f64) {
     let fitted = Tone::Gamma(point[LOG_GAMMA].exp());
     // Each standard encoding, from its own start (its light is not the
-    // power law's).
-    let candidates: Vec<(Tone, f64, f64)> = STANDARD_TONES
-        .iter()
+    // power law's), the three side by side.
+    let mut candidates: Vec<(Tone, f64, f64)> = STANDARD_TONES
+        .par_iter()
         .filter_map(|&tone| {
             let fit = with([true, false], Some(tone)).minimise(start, false)?;
             Some((tone, fit.1, fit.0[R0]))
         })
-        .chain(std::iter::once((fitted, rss, point[R0])))
         .collect();
+    candidates.push((fitted, rss, point[R0]));
     // The standard encoding that fits best if it fits as well as the power
     // law, else the power law (always a candidate).
     let (curve, _, centre) = candidates
