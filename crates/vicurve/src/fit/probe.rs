@@ -19,7 +19,9 @@
 //! needs. Otherwise (the start is farther than the band reaches somewhere, or the
 //! probe could not run at all) everything the probe did is undone and the
 //! schedule runs from its first stage, as it would have without the probe;
-//! the cost is the probe's one band and a few iterations.
+//! the cost is the probe's one band and a few iterations. A long curve's
+//! probe runs on the image binned as its stage is ([`super::pyramid`]),
+//! on a quarter of the band's pixels.
 //!
 //! Only the default schedule probes (the stages a user gives all run), and
 //! not a tracked frame (its schedule has one stage).
@@ -37,6 +39,7 @@ struct Saved {
     levels: LevelModel,
     reports: usize,
     skipped: usize,
+    binned_done: bool,
 }
 
 impl Schedule<'_> {
@@ -54,9 +57,18 @@ impl Schedule<'_> {
             levels: self.config.levels,
             reports: self.reports.len(),
             skipped: self.skipped.len(),
+            binned_done: self.binned_done,
         };
         self.probing = true;
-        let flow = self.run_stage(&stage, false);
+        // A long curve's probe runs on the binned image, as its stage then
+        // does (`super::pyramid`): the same reach in the image's pixels
+        // for a quarter of the band's pixels. A binned probe that does
+        // not complete leaves the start too far.
+        let flow = if self.binning(&stage, false) > 1 {
+            Ok(self.run_binned(&stage, false).unwrap_or(Flow::TooFar))
+        } else {
+            self.run_stage(&stage, false)
+        };
         self.probing = false;
         match flow? {
             Flow::Completed if self.outcome == Outcome::Converged => {
@@ -100,6 +112,7 @@ impl Schedule<'_> {
         self.config.levels = saved.levels;
         self.reports.truncate(saved.reports);
         self.skipped.truncate(saved.skipped);
+        self.binned_done = saved.binned_done;
         self.last = None;
         self.final_ends = Ends::default();
         self.outcome = Outcome::Converged;

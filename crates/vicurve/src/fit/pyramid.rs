@@ -24,22 +24,22 @@
 //! Only closed curves without corners are binned: an open curve reaches
 //! the border, where the binned image has no pixel centre within `(k - 1)
 //! / 2` px, and a corner's repeated knots tie the curve's parameter to the
-//! image's pixels. Neither are a tracked frame (one stage, the last), the
-//! probe ([`super::probe`]), an automatic stage or the paper's levelset
-//! coordinates (their mesh is in the image's pixels), nor a band under
-//! [`MIN_BINNED_AREA`] pixels, which is cheap. A binned stage that
-//! does not complete (its band leaves the binned image, it diverges) runs
-//! again on the image itself, as it would have without binning.
+//! image's pixels. Neither are a tracked frame (one stage, the last), an
+//! automatic stage or the paper's levelset coordinates (their mesh is in
+//! the image's pixels), nor a band under [`MIN_BINNED_AREA`] pixels, which
+//! is cheap. A binned stage that does not complete (its band leaves the
+//! binned image, it diverges) runs again on the image itself, as it would
+//! have without binning. The probe ([`super::probe`]) is binned as its
+//! stage is: a binned probe that does not complete says that the start is
+//! too far, as the probe on the image would.
 
 use super::schedule::{Flow, Schedule};
 use super::{Elements, LevelModel, Outcome, Stage};
 use crate::band::Coords;
 use crate::correlation::levels::MIN_LEVEL_ELEMENT;
 use crate::curve::SplineCurve;
-use crate::image::Image;
 use crate::interp::Sampler;
 use crate::spline::Basis;
-use rayon::prelude::*;
 use std::time::Instant;
 
 /// Narrowest band of a binned stage, in binned pixels: wider than the
@@ -81,8 +81,7 @@ fn binned(sampler: &Sampler, k: usize) -> Option<Sampler> {
         return None;
     }
     let scale = 1.0 / (k * k) as f64;
-    let mut data = vec![0.0; w * h];
-    data.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+    Some(Sampler::binned_level(w, h, sampler.kind(), |j, row| {
         for dy in 0..k {
             let line = &pixels[(j * k + dy) * stride..][..w * k];
             for (v, block) in row.iter_mut().zip(line.chunks_exact(k)) {
@@ -90,9 +89,7 @@ fn binned(sampler: &Sampler, k: usize) -> Option<Sampler> {
             }
         }
         row.iter_mut().for_each(|v| *v *= scale);
-    });
-    let image = Image::new_finite(w, h, data).ok()?;
-    Some(Sampler::binned_level(&image, sampler.kind()))
+    }))
 }
 
 /// `curve` mapped by `x -> scale x + offset` (both coordinates), its
@@ -199,11 +196,10 @@ impl Schedule<'_> {
     /// band of [`MIN_BINNED_HALF_WIDTH`], when the stage and the current
     /// curve may be binned (see the module docs) and its band covers
     /// [`MIN_BINNED_AREA`]; else 1.
-    fn binning(&self, stage: &Stage, is_last: bool) -> usize {
+    pub(super) fn binning(&self, stage: &Stage, is_last: bool) -> usize {
         let curve = &self.current;
         let eligible = !is_last
             && self.tracked.is_none()
-            && !self.probing
             && curve.is_closed()
             && curve.corners().is_empty()
             && curve.basis().breaks().is_empty()
@@ -250,6 +246,8 @@ impl Schedule<'_> {
         // The element floor of the schedule it stands in.
         sub.min_el = self.min_el;
         sub.coarse = true;
+        // A probe stops at its first new reference, binned or not.
+        sub.probing = self.probing;
         sub.run().ok()?;
         if sub.last.is_none() || matches!(sub.outcome, Outcome::Diverged { .. }) {
             return None;
@@ -268,6 +266,7 @@ impl Schedule<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::image::Image;
     use crate::interp::Interpolation;
 
     /// A binned pixel is the mean of its block; blocks cut by the border

@@ -175,11 +175,32 @@ impl Sampler {
         Sampler::with_pixels(image, kind, true)
     }
 
-    /// [`Sampler::new`] for a binned level of an image (`fit::pyramid`):
-    /// it keeps no pixels of its own to bin further (a bilinear level's
-    /// coefficients are its pixels).
-    pub(crate) fn binned_level(image: &Image, kind: Interpolation) -> Self {
-        Sampler::with_pixels(image, kind, false)
+    /// [`Sampler::new`] for a binned level of an image (`fit::pyramid`) of
+    /// `w x h` pixels, row `j` of which `row(j, out)` writes into `out`
+    /// (`w` values, zero before), the rows in parallel: straight into the
+    /// padded coefficients, with no image in between (a megapixel image's
+    /// level by 2 x 2 blocks is 2 MB, and a fresh buffer costs a page
+    /// fault per 4 KiB written). It keeps no pixels of its own to bin
+    /// further (a bilinear level's coefficients are its pixels).
+    pub(crate) fn binned_level(
+        w: usize,
+        h: usize,
+        kind: Interpolation,
+        row: impl Fn(usize, &mut [f64]) + Sync,
+    ) -> Self {
+        if kind == Interpolation::Bilinear && w >= 2 && h >= 2 {
+            let mut data = vec![0.0; w * h];
+            data.par_chunks_mut(w)
+                .enumerate()
+                .for_each(|(j, out)| row(j, out));
+            return Sampler::with_coef(kind, w, h, 0, Arc::new(data), Arc::default());
+        }
+        Sampler::padded(w, h, kind, Arc::default(), |coef, stride| {
+            coef[PAD * stride..(PAD + h) * stride]
+                .par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(j, out)| row(j, &mut out[PAD..PAD + w]));
+        })
     }
 
     /// [`Sampler::new`], keeping the image's pixels when `keep`.
@@ -197,20 +218,35 @@ impl Sampler {
         if kind == Interpolation::Bilinear && w >= 2 && h >= 2 {
             return Sampler::with_coef(kind, w, h, 0, image.shared_data(), pixels());
         }
-        // The image copied into the middle of the padded buffer, prefiltered
-        // there in place for a cubic B-spline, then its border mirrored.
+        // The image copied into the middle of the padded buffer.
+        let data = image.data();
+        Sampler::padded(w, h, kind, pixels(), |coef, stride| {
+            for (y, row) in data.chunks_exact(w).enumerate() {
+                coef[(y + PAD) * stride + PAD..][..w].copy_from_slice(row);
+            }
+        })
+    }
+
+    /// The sampler of `w x h` pixels that `fill(coef, stride)` writes
+    /// into the middle of the padded buffer `coef` (rows of `stride`
+    /// values, zero before): prefiltered there in place for a cubic
+    /// B-spline, then its border mirrored.
+    fn padded(
+        w: usize,
+        h: usize,
+        kind: Interpolation,
+        pixels: Arc<Vec<f64>>,
+        fill: impl FnOnce(&mut [f64], usize),
+    ) -> Self {
         let stride = w + 2 * PAD;
         let mut coef = crate::pages::with_capacity(stride * (h + 2 * PAD));
         coef.resize(stride * (h + 2 * PAD), 0.0);
-        let data = image.data();
-        for (y, row) in data.chunks_exact(w).enumerate() {
-            coef[(y + PAD) * stride + PAD..][..w].copy_from_slice(row);
-        }
+        fill(&mut coef, stride);
         if kind == Interpolation::CubicBSpline {
             prefilter::prefilter_2d_in(&mut coef, w, h, stride, PAD);
         }
         prefilter::mirror_border(&mut coef, w, h, stride, PAD);
-        Sampler::with_coef(kind, w, h, PAD, Arc::new(coef), pixels())
+        Sampler::with_coef(kind, w, h, PAD, Arc::new(coef), pixels)
     }
 
     fn with_coef(

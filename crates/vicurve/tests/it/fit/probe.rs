@@ -128,3 +128,31 @@ fn an_open_start_far_in_one_place_gets_the_wide_stages() {
         check(&format!("open, bump {height} px"), &m, &s, 8e-3);
     }
 }
+
+/// A long curve's probe runs on the image binned by 2, as its stage then
+/// does (`fit/pyramid.rs`): from a start 1.5 px off, the binned probe
+/// completes and the wide stages are skipped; with a bump 12 px out it
+/// does not, and the full schedule runs. Either way the result is the
+/// edge.
+#[test]
+fn a_long_curve_is_probed_on_the_binned_image() {
+    let (cx, cy, r) = (320.37, 319.71, 280.0);
+    let spec = disc(640, (cx, cy, r), 1.0, 0.01, 14, Some(8));
+    let image = render(&spec).expect("render");
+    for height in [0.0, 12.0] {
+        let offset = bump(height, 0.4);
+        let init = around(cx, cy, r, move |t| 1.5 * (2.0 * t).cos() + offset(t));
+        let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+        let s = evaluate(&m.points(), &spec.shape).expect("evaluate");
+        let label = format!("long curve, bump {height} px");
+        check(&label, &m, &s, 6e-3);
+        let first = &m.stages[0];
+        if height == 0.0 {
+            assert!(probed(&m), "{label}: skipped {:?}", m.skipped);
+            assert_eq!((first.half_width, first.binning), (5.0, 2), "{label}");
+        } else {
+            assert!(!probed(&m), "{label}: skipped {:?}", m.skipped);
+            assert_eq!((first.half_width, first.binning), (20.0, 8), "{label}");
+        }
+    }
+}
