@@ -598,12 +598,11 @@ fn read(
 /// measurement's own model of the edge), from the residual sum of squares
 /// `linear` of the linear fit; `noise`: the noise variance of the
 /// evidence, or the Gaussian linear fit's residual variance where it
-/// misfits more. None when the Gaussian, in
-/// the light that fits it best, fits the profile clearly worse than the
-/// bumps in linear light (by the evidence an encoding needs). The power
-/// laws are fitted only when sRGB fits less than [`RULED_OUT`] noise
-/// variances worse than linear light (they bend the levels almost
-/// alike).
+/// misfits more. None when the Gaussian, in the light that fits it best,
+/// fits the profile clearly worse than the bumps in linear light (by the
+/// evidence an encoding needs). The power laws are fitted only when sRGB
+/// fits less than [`RULED_OUT`] noise variances worse than linear light
+/// (they bend the levels almost alike).
 ///
 /// Why a Gaussian blur: the bumps follow any symmetric blur, and with
 /// them an encoding fits a linear edge's profile nearly as well as linear
