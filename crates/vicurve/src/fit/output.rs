@@ -7,7 +7,7 @@ use super::blur_offset::Coupling;
 use super::breaks;
 use super::misfit::{band_range, oscillation, oscillation_at, EdgeCheck, ResidualMisfit};
 use super::reference::{chord_lengths, CURVE_SPACING};
-use super::refine::displacement;
+use super::refine::{displacement, LocalShapeError};
 use super::representation::Representation;
 use super::{LevelSample, Sample};
 use crate::correlation::Correlation;
@@ -49,6 +49,10 @@ pub(super) struct Final {
     /// sample's `sigma` (not a flagged misfit: where along the curve it
     /// lies is not known).
     pub shape_error: Option<f64>,
+    /// Where along the curve that error lies, when the refinement could
+    /// tell: each sample's own model term, and a flagged misfit where it
+    /// exceeds the noise term.
+    pub local_shape: Option<LocalShapeError>,
     /// How the pixel edge's blur and the curve's offset trade off, where
     /// they do (`fit/blur_offset.rs`): the blur's uncertainty then adds to
     /// every sample's noise term.
@@ -154,6 +158,9 @@ impl Final {
                 // error is spread over the curve: it counts in `sigma`,
                 // not as a local misfit.
                 let model = misfit.max(shape).max(self.shape_error.unwrap_or(0.0));
+                // ... and where it lies, its share here.
+                let local = self.local_shape.as_ref().map_or(0.0, |l| l.at(q));
+                let (model, shape) = (model.max(local), shape.max(local));
                 // The blur's curvature shift left in the curve.
                 let unremoved = left.map_or(0.0, |sigma| {
                     crate::psf::curvature_shift(sigma, f.curvature).abs()

@@ -23,7 +23,7 @@ use super::output::Final;
 use super::reference::{
     next_reference, reference_spacing, trim_to_band, Clip, Ends, CURVE_SPACING, TRIM_MARGIN,
 };
-use super::refine::{refine, Fitted, RefineBand};
+use super::refine::{refine, Fitted, LocalShapeError, RefineBand};
 use super::robust::{robust_refit, RobustFit};
 use super::run::{iterate_to_end, largest_change, Run, RunLimits, RunLog};
 use super::schedule::{Flow, Schedule};
@@ -140,6 +140,8 @@ pub(super) struct StageState {
     /// The shape error of those elements, when the refinement measured one
     /// (`refine::kept_shape_error`), pixels RMS.
     shape_error: Option<f64>,
+    /// Where along the curve that error lies (`refine::LocalShapeError`).
+    local_shape: Option<LocalShapeError>,
     /// Settling re-references so far.
     settles: usize,
     /// Decided once per stage, on its first converged run (the runs after
@@ -271,6 +273,7 @@ impl Schedule<'_> {
             coupling: None,
             fixed_elements: None,
             shape_error: None,
+            local_shape: None,
             settles: 0,
             levels_tested: false,
             cluttered: None,
@@ -932,6 +935,7 @@ impl Schedule<'_> {
             (corr, lambda, st.step) = (fit.corr, fit.lambda, Some(fit.step));
             st.iterations += refined.iterations;
             st.shape_error = refined.shape_error;
+            st.local_shape = refined.local_shape;
             if let Some(reference) = refined.reference {
                 self.current = reference;
             }
@@ -1004,6 +1008,7 @@ impl Schedule<'_> {
             corr,
             lambda,
             shape_error: st.shape_error,
+            local_shape: st.local_shape.take(),
             coupling: st.coupling,
         });
         Ok(Next::Exit(Flow::Completed))
