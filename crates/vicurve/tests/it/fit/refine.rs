@@ -40,13 +40,14 @@ fn a_small_disc_refines_on_its_own_reference() {
 /// and gentle bends elsewhere: a mean radius of 59.8 px with harmonics 4,
 /// 5 and 6, darker than its background (111 on 188 of 255), its pixel
 /// coverage (16 x 16 points a pixel) blurred by 1.31 px on the pixel grid
-/// (as `bench/probes/shapes.py` renders, its seed 1110), noiseless, 8 bits,
-/// measured from the automatic start. The pixel-edge stage keeps elements
-/// of 4.8 px (the finer fit's noise would cost more than the bay's shape
-/// error, summed over the whole curve), which cut the bay by up to 0.044
-/// px, 4.2 `sigma` (measured before). The rejected finer fit's difference
-/// says where: the samples near the bay are now within 3 `sigma` of the
-/// curve (2.3, measured), and flagged.
+/// (as `bench/probes/shapes.py` rendered its seed 1110 before it took
+/// exact coverage), noiseless, 8 bits, measured from the automatic start.
+/// The pixel-edge stage keeps elements of 4.8 px (the finer fit's noise
+/// would cost more than the bay's shape error, summed over the whole
+/// curve), which cut the bay by up to 0.044 px, 4.2 `sigma` (measured
+/// before). The rejected finer fit's difference says where: the samples
+/// near the bay are now within 3 `sigma` of the curve (2.3, measured), and
+/// flagged.
 #[test]
 fn a_bay_the_kept_elements_cut_is_charged_where_it_lies() {
     use vicurve::render::blur::gaussian_blur;
