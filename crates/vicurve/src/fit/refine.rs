@@ -494,10 +494,11 @@ pub(super) struct LocalShapeError {
 const LOOKUP_REACH: f64 = 1.5;
 
 impl LocalShapeError {
-    /// From the reference's points `at` (those of `Curve::sample_params`,
-    /// in order), each one's squared difference and noise share `(diff2,
-    /// noise2)`, `per_element` points per coarse element, the settles'
-    /// `shape_gain`; `None` where no window's difference is significant.
+    /// From the reference's points `at` (those of
+    /// `SplineCurve::sample_params`, in order), each one's squared
+    /// difference and noise share `(diff2, noise2)`, `per_element` points
+    /// per coarse element, the settles' `shape_gain`; `None` where no
+    /// window's difference is significant.
     fn new(
         at: &[[f64; 2]],
         (diff2, noise2): (&[f64], &[f64]),
