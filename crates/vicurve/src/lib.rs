@@ -9,6 +9,7 @@
 #![deny(missing_docs)]
 
 pub mod band;
+pub(crate) mod buckets;
 pub(crate) mod correlation;
 pub mod curve;
 pub mod derived;

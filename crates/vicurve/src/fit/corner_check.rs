@@ -437,8 +437,7 @@ impl Patch {
     /// and at parameter `u` (a vertex).
     fn whole(curve: &SplineCurve, u: f64) -> Vec<[f64; 2]> {
         let length = curve.param_length();
-        let n = ((length / RING_STEP).ceil() as usize).max(8);
-        let mut params: Vec<f64> = (0..n).map(|k| length * k as f64 / n as f64).collect();
+        let mut params = curve.sample_params(((length / RING_STEP).ceil() as usize).max(8));
         let u = u.rem_euclid(length);
         let at = params.partition_point(|&t| t < u);
         if params.get(at) != Some(&u) {

@@ -10,6 +10,7 @@ use super::reference::{next_reference, Ends, CURVE_SPACING};
 use super::run::{iterate_to_end, Run, RunLimits, RunLog};
 use super::{breaks, FitConfig, IterationRecord, RunKind};
 use crate::band::Band;
+use crate::buckets::Buckets;
 use crate::correlation::{Correlation, Step};
 use crate::curve::SplineCurve;
 use crate::error::Result;
@@ -479,12 +480,13 @@ const LOCAL_SIGNIFICANCE: f64 = 15.0;
 /// times the settles' shape gain; a bend's least-squares error reaches
 /// half an element beyond the bend, so each point takes the largest
 /// within half an element.
-#[derive(Clone, Debug)]
 pub(super) struct LocalShapeError {
-    /// The points where the error counts, and the error there.
-    points: Vec<([f64; 2], f64)>,
-    /// Indices into `points` by square cell of [`LOOKUP_REACH`] pixels.
-    cells: std::collections::HashMap<(i64, i64), Vec<usize>>,
+    /// The points where the error counts...
+    points: Vec<[f64; 2]>,
+    /// ... the error at each...
+    values: Vec<f64>,
+    /// ... and the points in buckets of [`LOOKUP_REACH`].
+    buckets: Buckets,
 }
 
 /// A sample takes the largest error of the points within this many
@@ -537,45 +539,30 @@ impl LocalShapeError {
                 }
             })
             .collect();
-        let points: Vec<([f64; 2], f64)> = (0..n)
+        let (points, values): (Vec<[f64; 2]>, Vec<f64>) = (0..n)
             .map(|k| (at[k], window(k).map(|j| excess[j]).fold(0.0, f64::max)))
             .filter(|&(_, v)| v > 0.0)
-            .collect();
+            .unzip();
         if points.is_empty() {
             return None;
         }
-        let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
-        for (k, (p, _)) in points.iter().enumerate() {
-            cells.entry(cell_of(*p)).or_default().push(k);
-        }
-        Some(LocalShapeError { points, cells })
+        let buckets = Buckets::new(points.iter().copied(), LOOKUP_REACH);
+        Some(LocalShapeError {
+            points,
+            values,
+            buckets,
+        })
     }
 
     /// The error (pixels RMS) at the point `p`: the largest within
     /// [`LOOKUP_REACH`], else 0.
     pub fn at(&self, p: [f64; 2]) -> f64 {
-        let (i, j) = cell_of(p);
-        let mut most = 0.0f64;
-        for ci in i - 1..=i + 1 {
-            for cj in j - 1..=j + 1 {
-                for &k in self.cells.get(&(ci, cj)).into_iter().flatten() {
-                    let (q, v) = self.points[k];
-                    if (q[0] - p[0]).hypot(q[1] - p[1]) <= LOOKUP_REACH {
-                        most = most.max(v);
-                    }
-                }
-            }
-        }
-        most
+        self.buckets
+            .within(|k| self.points[k], p, LOOKUP_REACH)
+            .into_iter()
+            .map(|k| self.values[k])
+            .fold(0.0, f64::max)
     }
-}
-
-/// The lookup cell of `p` ([`LocalShapeError`]).
-fn cell_of(p: [f64; 2]) -> (i64, i64) {
-    (
-        (p[0] / LOOKUP_REACH).floor() as i64,
-        (p[1] / LOOKUP_REACH).floor() as i64,
-    )
 }
 
 /// The next element length (parameter units) after `coarse`, down to

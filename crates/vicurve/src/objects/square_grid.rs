@@ -23,6 +23,7 @@
 //! table, map and forming-limit plot.
 
 use super::{find::find_objects, AllConfig, AllResult, GridStrain, ObjectPolarity, ObjectResult};
+use crate::buckets::Buckets;
 use crate::error::Result;
 use crate::image::Image;
 use std::collections::HashMap;
@@ -84,7 +85,7 @@ pub fn lattice_indices(points: &[Option<[f64; 2]>]) -> Vec<Option<[i64; 2]>> {
     let Some(spacing) = typical_spacing(&valid) else {
         return out;
     };
-    let index = Buckets::new(&valid, 1.5 * spacing);
+    let index = Buckets::new(valid.iter().map(|v| v.1), 1.5 * spacing);
     let Some((seed, a1, a2)) = seed_basis(&valid, &index, spacing) else {
         return out;
     };
@@ -104,7 +105,7 @@ pub fn lattice_indices(points: &[Option<[f64; 2]>]) -> Vec<Option<[i64; 2]>> {
         ] {
             let q = [p[0] + sign * step[0], p[1] + sign * step[1]];
             let reach = NEIGHBOUR_TOLERANCE * norm(a1).min(norm(a2));
-            let Some(n) = index.nearest(&valid, q, reach) else {
+            let Some(n) = nearest(&index, &valid, q, reach) else {
                 continue;
             };
             let d = if along_columns {
@@ -397,9 +398,9 @@ fn typical_spacing(valid: &[(usize, [f64; 2])]) -> Option<f64> {
         .sqrt()
         .max(1.0);
     for _ in 0..8 {
-        let b = Buckets::new(valid, size);
+        let b = Buckets::new(valid.iter().map(|v| v.1), size);
         let mut d: Vec<f64> = (0..valid.len())
-            .filter_map(|k| b.nearest_other(valid, k, size))
+            .filter_map(|k| nearest_other(&b, valid, k, size))
             .collect();
         if 2 * d.len() >= valid.len() {
             d.sort_unstable_by(f64::total_cmp);
@@ -428,7 +429,7 @@ fn seed_basis(
     for &k in order.iter().take(16) {
         let p = valid[k].1;
         let near: Vec<[f64; 2]> = index
-            .within(valid, p, 1.4 * spacing)
+            .within(|j| valid[j].1, p, 1.4 * spacing)
             .into_iter()
             .filter(|&j| j != k)
             .map(|j| [valid[j].1[0] - p[0], valid[j].1[1] - p[1]])
@@ -453,58 +454,24 @@ fn seed_basis(
     None
 }
 
-/// Points in square buckets of a given size, for nearest-point queries
-/// within that size.
-struct Buckets {
-    size: f64,
-    map: HashMap<(i64, i64), Vec<usize>>,
+/// The point of `valid` nearest `q` within `r` (at most the buckets'
+/// size).
+fn nearest(index: &Buckets, valid: &[(usize, [f64; 2])], q: [f64; 2], r: f64) -> Option<usize> {
+    let d = |k: usize| (valid[k].1[0] - q[0]).hypot(valid[k].1[1] - q[1]);
+    index
+        .within(|k| valid[k].1, q, r)
+        .into_iter()
+        .min_by(|&a, &b| d(a).total_cmp(&d(b)))
 }
 
-impl Buckets {
-    fn new(valid: &[(usize, [f64; 2])], size: f64) -> Buckets {
-        let mut map: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
-        for (k, (_, p)) in valid.iter().enumerate() {
-            map.entry(Self::key(p, size)).or_default().push(k);
-        }
-        Buckets { size, map }
-    }
-
-    fn key(p: &[f64; 2], size: f64) -> (i64, i64) {
-        ((p[0] / size).floor() as i64, (p[1] / size).floor() as i64)
-    }
-
-    /// Points within `r <= size` of `q`.
-    fn within(&self, valid: &[(usize, [f64; 2])], q: [f64; 2], r: f64) -> Vec<usize> {
-        let (bx, by) = Self::key(&q, self.size);
-        let mut out = Vec::new();
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for &k in self.map.get(&(bx + dx, by + dy)).into_iter().flatten() {
-                    let p = valid[k].1;
-                    if (p[0] - q[0]).hypot(p[1] - q[1]) <= r {
-                        out.push(k);
-                    }
-                }
-            }
-        }
-        out
-    }
-
-    /// The point nearest `q` within `r <= size`.
-    fn nearest(&self, valid: &[(usize, [f64; 2])], q: [f64; 2], r: f64) -> Option<usize> {
-        let d = |k: usize| (valid[k].1[0] - q[0]).hypot(valid[k].1[1] - q[1]);
-        self.within(valid, q, r)
-            .into_iter()
-            .min_by(|&a, &b| d(a).total_cmp(&d(b)))
-    }
-
-    /// Distance from point `k` to its nearest other point within `r <= size`.
-    fn nearest_other(&self, valid: &[(usize, [f64; 2])], k: usize, r: f64) -> Option<f64> {
-        let q = valid[k].1;
-        self.within(valid, q, r)
-            .into_iter()
-            .filter(|&j| j != k)
-            .map(|j| (valid[j].1[0] - q[0]).hypot(valid[j].1[1] - q[1]))
-            .min_by(f64::total_cmp)
-    }
+/// Distance from point `k` of `valid` to its nearest other point within
+/// `r` (at most the buckets' size).
+fn nearest_other(index: &Buckets, valid: &[(usize, [f64; 2])], k: usize, r: f64) -> Option<f64> {
+    let q = valid[k].1;
+    index
+        .within(|j| valid[j].1, q, r)
+        .into_iter()
+        .filter(|&j| j != k)
+        .map(|j| (valid[j].1[0] - q[0]).hypot(valid[j].1[1] - q[1]))
+        .min_by(f64::total_cmp)
 }
