@@ -135,6 +135,8 @@ pub struct SynthArgs {
     pub levels: Option<(f64, f64)>,
     /// Tone curve encoding the light (linear).
     pub tone: vicurve::tone::Tone,
+    /// Uneven light (even).
+    pub shading: vicurve::render::Shading,
 }
 
 impl SynthArgs {
@@ -161,6 +163,7 @@ impl SynthArgs {
             bits: Some(8),
             levels: None,
             tone: vicurve::tone::Tone::Linear,
+            shading: vicurve::render::Shading::default(),
         }
     }
 }
@@ -200,6 +203,8 @@ pub fn synth_spec(a: &SynthArgs) -> Result<RenderSpec, vicurve::Error> {
         spec.noise = a.noise;
         spec.seed = a.seed;
         spec.bits = a.bits;
+        spec.tone = a.tone;
+        spec.shading = a.shading;
         spec.validate()?;
         return Ok(spec);
     }
@@ -268,6 +273,7 @@ pub fn synth_spec(a: &SynthArgs) -> Result<RenderSpec, vicurve::Error> {
         seed: a.seed,
         bits: a.bits,
         tone: a.tone,
+        shading: a.shading,
     };
     spec.validate()?;
     Ok(spec)

@@ -310,7 +310,11 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
 /// uint16, None: float64 without quantisation), `levels=(background,
 /// foreground)` in [0, 1] (0.2, 0.8), `tone` (the tone curve that
 /// encodes the light in the gray levels: "linear", "srgb" or a gamma such
-/// as "2.2"; the noise is added after it).
+/// as "2.2"; the noise is added after it), `shading` (uneven light
+/// multiplying the levels before the tone curve: "GX,GY" a gradient, the
+/// light changing by GX, a fraction, from the first column to the last
+/// and by GY down the rows, "GX,GY,V" and vignetting, corners darker by
+/// V; "even").
 ///
 /// The image is a (height, width) array equal to the file the command line
 /// writes; `truth` is the content of its truth file (the exact curve, the
@@ -320,8 +324,8 @@ fn grow_from_py(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<GrowConfig>> 
     shape, *, size = (512, 512), center = None, radius = None, axes = None,
     angle = 20.0, amplitude = None, lobes = 5, phase = 0.0, wavelength = None,
     y0 = None, line = None, profile = None, blur = 0.0, blur_y = None, noise = 0.0,
-    seed = 1, bits = Some(8), levels = None, tone = "linear"
-), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, blur_y=None, noise=0.0, seed=1, bits=8, levels=None, tone='linear')")]
+    seed = 1, bits = Some(8), levels = None, tone = "linear", shading = "even"
+), text_signature = "(shape, *, size=(512, 512), center=None, radius=None, axes=None, angle=20.0, amplitude=None, lobes=5, phase=0.0, wavelength=None, y0=None, line=None, profile=None, blur=0.0, blur_y=None, noise=0.0, seed=1, bits=8, levels=None, tone='linear', shading='even')")]
 #[allow(clippy::too_many_arguments)]
 pub fn synth<'py>(
     py: Python<'py>,
@@ -345,6 +349,7 @@ pub fn synth<'py>(
     bits: Option<i64>,
     levels: Option<(f64, f64)>,
     tone: &str,
+    shading: &str,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mut a = SynthArgs::new(ShapeName::parse(shape).map_err(value_error)?);
     a.size = size;
@@ -365,6 +370,7 @@ pub fn synth<'py>(
     a.noise = noise;
     a.levels = levels;
     a.tone = tone.parse().map_err(to_py_err)?;
+    a.shading = shading.parse().map_err(to_py_err)?;
     a.seed = u64::try_from(seed)
         .map_err(|_| value_error(format!("invalid seed: {seed} (must be >= 0)")))?;
     a.bits = match bits {

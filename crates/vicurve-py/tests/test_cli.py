@@ -34,6 +34,11 @@ SYNTH_CASES = [
     (["disc", "--size", "160x160", "--radius", "50", "--blur", "1", "--blur-y", "2.5"],
      dict(shape="disc", size=(160, 160), radius=50, blur=1, blur_y=2.5)),
     (["paper-disc"], dict(shape="paper-disc")),
+    (["ellipse", "--size", "200x160", "--blur", "1", "--noise", "0.01", "--shading",
+      "0.12,-0.06,0.2"],
+     dict(shape="ellipse", size=(200, 160), blur=1, noise=0.01, shading="0.12,-0.06,0.2")),
+    (["paper-disc", "--tone", "2.2", "--shading", "0.1,0"],
+     dict(shape="paper-disc", tone="2.2", shading="0.1,0")),
 ]
 
 

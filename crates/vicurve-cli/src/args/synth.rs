@@ -129,6 +129,12 @@ pub struct Args {
     /// the encoding.
     #[arg(long, default_value = "linear", value_name = "CURVE")]
     pub tone: String,
+    /// Uneven light, multiplying the levels before the tone curve:
+    /// `GX,GY` a gradient (the light changes by GX, a fraction, from the
+    /// first column to the last, by GY down the rows), `GX,GY,V` and
+    /// vignetting (corners darker by V); `even` (the default).
+    #[arg(long, default_value = "even", value_name = "GX,GY[,V]")]
+    pub shading: String,
     /// Necking: number of frames.
     #[arg(long, default_value_t = 8)]
     pub frames: usize,

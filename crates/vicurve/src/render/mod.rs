@@ -19,11 +19,13 @@ pub mod noise;
 pub mod presets;
 pub mod profile;
 pub mod scene;
+pub mod shading;
 pub mod shapes;
 pub mod specimen;
 pub mod square_grid;
 mod truth_file;
 
+pub use shading::Shading;
 pub use truth_file::Truth;
 
 use crate::tone::Tone;
@@ -97,6 +99,10 @@ pub struct RenderSpec {
     /// quantisation, as a camera writing JPEG files does. Default: linear
     /// ([`Tone::Auto`] is linear too).
     pub tone: Tone,
+    /// Uneven light multiplying the levels before the tone curve (a
+    /// gradient, vignetting); default even. Left out of files when even.
+    #[serde(skip_serializing_if = "Shading::is_even")]
+    pub shading: Shading,
 }
 
 impl Default for RenderSpec {
@@ -122,6 +128,7 @@ impl Default for RenderSpec {
             seed: 0,
             bits: None,
             tone: Tone::Linear,
+            shading: Shading::default(),
         }
     }
 }
@@ -200,6 +207,7 @@ impl RenderSpec {
                 ));
             }
         }
+        self.shading.validate()?;
         self.shape.validate()?;
         if self.kind == Kind::Contour && self.method == Method::Coverage {
             self.validate_line()?;
@@ -263,8 +271,9 @@ impl RenderSpec {
 /// ([`blur::gaussian_blur`]), value `background + (foreground -
 /// background) * fraction`; then noise of standard
 /// deviation `noise * |foreground - background|` ([`noise::add_gaussian_noise`]);
-/// then quantisation ([`noise::quantise`]) if `bits` is set. With a
-/// `tone`, the values are encoded by it before the noise.
+/// then quantisation ([`noise::quantise`]) if `bits` is set. The light is
+/// multiplied by the `shading` after the blur, and with a `tone` the
+/// values are encoded by it before the noise.
 ///
 /// Errors: those of [`RenderSpec::validate`].
 pub fn render(spec: &RenderSpec) -> Result<Image> {

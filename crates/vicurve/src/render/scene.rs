@@ -9,7 +9,7 @@
 //! everywhere; blurred before the pixels integrate, then noise and
 //! quantisation, as [`super::render`].
 
-use super::{blur, noise, shapes, Method, RenderSpec};
+use super::{blur, noise, shapes, Method, RenderSpec, Shading};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::tone::Tone;
@@ -72,6 +72,10 @@ pub struct Rendering {
     /// [`super::RenderSpec::tone`]); linear when absent.
     #[serde(default = "Tone::linear")]
     pub tone: Tone,
+    /// Uneven light (see [`super::RenderSpec::shading`]); even when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Shading::is_even")]
+    pub shading: Shading,
 }
 
 impl Rendering {
@@ -87,6 +91,7 @@ impl Rendering {
             seed,
             bits: Some(8),
             tone: Tone::Linear,
+            shading: Shading::default(),
         }
     }
 
@@ -101,6 +106,7 @@ impl Rendering {
             seed: spec.seed,
             bits: spec.bits,
             tone: spec.tone,
+            shading: spec.shading,
         }
     }
 }
@@ -141,6 +147,7 @@ pub fn render_scene(scene: &Scene) -> Result<Image> {
             noise: scene.rendering.noise,
             seed: scene.rendering.seed,
             bits: scene.rendering.bits,
+            shading: scene.rendering.shading,
             ..RenderSpec::default()
         };
         spec.validate()?;
@@ -169,9 +176,12 @@ pub(super) fn paint(
     Ok(finish(Image::new(width, height, cov)?, r))
 }
 
-/// `image` with the noise and the quantisation of `r` (its blur is
-/// already in it).
+/// `image` (light, its blur already in it) with the shading, tone, noise
+/// and quantisation of `r`. The noise is a fraction of the contrast of
+/// the levels as encoded, whatever the shading.
 pub(super) fn finish(mut image: Image, r: &Rendering) -> Image {
+    let size = (image.width(), image.height());
+    r.shading.apply(image.data_mut(), size);
     let mut contrast = (r.foreground - r.background).abs();
     if !r.tone.is_identity() {
         for v in image.data_mut() {

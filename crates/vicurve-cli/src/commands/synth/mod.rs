@@ -6,6 +6,7 @@ mod scene;
 pub use crate::args::synth::Args;
 use crate::args::synth::{check_bits, numbers, parse_size, ShapeName, DEFAULT_LEVELS};
 use crate::failure::Failure;
+use vicurve::render::Shading;
 use vicurve::render::Truth;
 use vicurve::render::{presets, render, Method, RenderSpec};
 use vicurve::tone::Tone;
@@ -53,6 +54,10 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         .tone
         .parse()
         .map_err(|e| Failure::Error(format!("--tone: {e}")))?;
+    let shading: Shading = a
+        .shading
+        .parse()
+        .map_err(|e| Failure::Error(format!("--shading: {e}")))?;
     if a.shape == ShapeName::PaperDisc {
         // The preset (512x512, levels 0 and 1 unless given), with the
         // user's radius, profile, blur, noise and depth on top.
@@ -69,6 +74,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         spec.seed = a.seed;
         spec.bits = Some(bits);
         spec.tone = tone;
+        spec.shading = shading;
         spec.validate()?;
         return Ok(spec);
     }
@@ -155,6 +161,7 @@ pub fn spec_from_args(a: &Args) -> Result<RenderSpec, Failure> {
         seed: a.seed,
         bits: Some(bits),
         tone,
+        shading,
     };
     spec.validate()?;
     Ok(spec)

@@ -10,13 +10,17 @@ use crate::output::write_json;
 use vicurve::render::scene::{circle_grid, random_scene, render_scene, strained_grid, Rendering};
 use vicurve::render::square_grid::square_grid;
 
-/// `--blur`, `--blur-y`, `--noise`, `--tone` and `--bits` (default 8) set in `r`; the
-/// bits.
+/// `--blur`, `--blur-y`, `--noise`, `--tone`, `--shading` and `--bits`
+/// (default 8) set in `r`; the bits.
 fn with_options(a: &Args, r: &mut Rendering) -> Result<u8, Failure> {
     r.tone = a
         .tone
         .parse()
         .map_err(|e| Failure::Error(format!("--tone: {e}")))?;
+    r.shading = a
+        .shading
+        .parse()
+        .map_err(|e| Failure::Error(format!("--shading: {e}")))?;
     if let Some(b) = a.blur {
         r.blur_sigma = b;
     }

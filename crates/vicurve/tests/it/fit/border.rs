@@ -47,6 +47,7 @@ fn image_spec(kind: Kind, seed: u64) -> RenderSpec {
         seed,
         bits: Some(8),
         tone: vicurve::tone::Tone::Linear,
+        shading: Default::default(),
     }
 }
 

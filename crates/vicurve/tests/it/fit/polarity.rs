@@ -32,6 +32,7 @@ fn ring(line: f64, ground: f64, blur: f64, noise: f64, seed: u64) -> RenderSpec 
         seed,
         bits: Some(8),
         tone: vicurve::tone::Tone::Linear,
+        shading: Default::default(),
     }
 }
 

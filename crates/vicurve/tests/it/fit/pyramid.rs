@@ -89,6 +89,7 @@ fn a_thin_line_is_found_through_the_binned_stages() {
         seed: 7,
         bits: Some(8),
         tone: vicurve::tone::Tone::Linear,
+        shading: Default::default(),
     };
     let init = InitialCurve::Circle {
         cx: cx + 9.0,

@@ -58,6 +58,7 @@ fn an_overshooting_run_converges_in_a_few_iterations() {
         seed: 5,
         bits: Some(8),
         tone: vicurve::tone::Tone::Linear,
+        shading: Default::default(),
     };
     let config = FitConfig {
         kind: Kind::Contour,

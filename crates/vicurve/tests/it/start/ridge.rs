@@ -37,6 +37,7 @@ fn blurred_line_image(
         seed: 3,
         bits: Some(8),
         tone: vicurve::tone::Tone::Linear,
+        shading: Default::default(),
     })
     .unwrap()
 }

@@ -7,7 +7,7 @@
 //! comes from a generator seeded by the image id or the case id, never
 //! chosen per case.
 
-use vicurve::render::{Kind, Method, RenderSpec};
+use vicurve::render::{Kind, Method, RenderSpec, Shading};
 use vicurve::tone::Tone;
 use vicurve::truth::Shape;
 
@@ -30,6 +30,20 @@ pub const TONES: [Tone; 2] = [Tone::Srgb, Tone::Gamma(2.2)];
 /// The blurs along x and along y of the astigmatic images, px (a lens
 /// blurring one axis more than the other).
 pub const ASTIGMATIC: (f64, f64) = (1.0, 2.5);
+
+/// The uneven light of the shaded images: a gradient across the field,
+/// and vignetting with a weaker gradient (a lamp beside the specimen; a
+/// backlight or lens darker towards the corners).
+pub const SHADINGS: [Shading; 2] = [
+    Shading {
+        gradient: [0.12, -0.06],
+        vignetting: 0.0,
+    },
+    Shading {
+        gradient: [0.04, 0.03],
+        vignetting: 0.3,
+    },
+];
 
 /// The paper's three stages, used by half the far-start stars.
 pub const PAPER_STAGES: &str = "20:25,10:50,5:100";
@@ -189,6 +203,8 @@ pub struct ImageCase {
     pub tone: Tone,
     /// Astigmatic images: the blur along y, px (`blur` is along x).
     pub blur_y: Option<f64>,
+    /// The light across the field (even for most).
+    pub shading: Shading,
     /// The image to render (its shape is the truth).
     pub spec: RenderSpec,
 }
@@ -343,6 +359,7 @@ pub fn encoded_case(
         seed: seed_of(&id),
         bits: Some(bits),
         tone,
+        shading: Shading::default(),
     };
     ImageCase {
         id,
@@ -353,6 +370,7 @@ pub fn encoded_case(
         noise,
         tone,
         blur_y: None,
+        shading: Shading::default(),
         spec,
     }
 }
@@ -371,6 +389,23 @@ pub fn astigmatic_case(
     image.id.push_str(&format!("/astig{}", num(blur_y)));
     image.blur_y = Some(blur_y);
     image.spec.blur_sigma_y = Some(blur_y);
+    image.spec.seed = seed_of(&image.id);
+    image
+}
+
+/// The image of `shape` under the uneven light `shading` (the shape of
+/// [`image_case`]'s image; its id ends in `shaded` and the shading's
+/// words).
+pub fn shaded_case(
+    shape: ShapeName,
+    shading: Shading,
+    (blur, noise, bits): (f64, f64, u8),
+    bright: bool,
+) -> ImageCase {
+    let mut image = image_case(shape, blur, noise, bits, bright);
+    image.id.push_str(&format!("/shaded{shading}"));
+    image.shading = shading;
+    image.spec.shading = shading;
     image.spec.seed = seed_of(&image.id);
     image
 }
@@ -402,6 +437,25 @@ fn full_sweep() -> Vec<Case> {
     }
     out.extend(encoded_sweep());
     out.extend(astigmatic_sweep());
+    out.extend(shaded_sweep());
+    out
+}
+
+/// Every shape under each of [`SHADINGS`], at the blurs of an ordinary
+/// camera (1 and 2 px) and 1 % noise, 8 bits, both polarities, with every
+/// start.
+fn shaded_sweep() -> Vec<Case> {
+    let mut out = Vec::new();
+    for shape in ShapeName::SWEEP {
+        for shading in SHADINGS {
+            for blur in [1.0, 2.0] {
+                for bright in [true, false] {
+                    let image = shaded_case(shape, shading, (blur, 0.01, 8), bright);
+                    out.extend(with_starts(&image, None));
+                }
+            }
+        }
+    }
     out
 }
 
@@ -479,6 +533,15 @@ fn ci_sweep() -> Vec<Case> {
     // An astigmatic star.
     let image = astigmatic_case(ShapeName::StarSharp, ASTIGMATIC, 0.01, 8, true);
     out.push(case(&image, Start::Auto, None));
+    // Uneven light: a gradient across an ellipse, vignetting along an
+    // edge crossing the image.
+    for (shape, shading, start) in [
+        (ShapeName::Ellipse, SHADINGS[0], Start::Auto),
+        (ShapeName::SineEdge, SHADINGS[1], Start::Polyline1_5),
+    ] {
+        let image = shaded_case(shape, shading, (1.0, 0.01, 8), false);
+        out.push(case(&image, start, None));
+    }
     out
 }
 

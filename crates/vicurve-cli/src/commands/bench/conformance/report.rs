@@ -1,7 +1,9 @@
 //! `conformance.md`: how to reproduce, the conventions, the pass counts per
 //! shape x start, every failing case with its reasons, the full table.
 
-use super::cases::{ShapeName, ASTIGMATIC, BLURS, LINE_WIDTH, NOISES, PAPER_STAGES, SIZE, TONES};
+use super::cases::{
+    ShapeName, ASTIGMATIC, BLURS, LINE_WIDTH, NOISES, PAPER_STAGES, SHADINGS, SIZE, TONES,
+};
 use super::score::{
     Row, BIAS_EASY, BIAS_HARD, BIAS_NOISE_SDS, BORDER_GAP, CLOSED_COVERAGE, MAX_OVER_SCATTER,
     SIGMA_RATIO,
@@ -63,6 +65,11 @@ fn header(s: &mut String, rows: &[Row], command: &str) {
 fn conventions(s: &mut String) {
     let (blur_x, blur_y) = ASTIGMATIC;
     let tones: Vec<String> = TONES.iter().map(|t| t.to_string()).collect();
+    let (g0, g1, v1) = (
+        SHADINGS[0].gradient,
+        SHADINGS[1].gradient,
+        SHADINGS[1].vignetting,
+    );
     let _ = writeln!(
         s,
         "## Conventions\n\n\
@@ -78,6 +85,12 @@ fn conventions(s: &mut String) {
          srgb`, `disc gamma:2.2`); and blurred by {blur_x} px along x and \
          {blur_y} px along y (shapes `disc astigmatic`, ids ending in `astig` and the \
          blur along y).\n\
+         - **Shaded images** (every shape, blur 1 and 2 px, 1 % noise, 8 bits): the light \
+         multiplied by an uneven field after the blur (`render::Shading`): a gradient \
+         of {g0:?} (the fraction the light changes by across the width and the height) \
+         or vignetting of {v1} (corners that much darker) with a gradient of {g1:?} \
+         (shapes `disc shaded`, ids ending in `shaded` and the gradient's and \
+         vignetting's numbers).\n\
          - **Shapes**: disc r = 150; ellipse 180 x 110; stars of 6 lobes, mean radius 140, \
          amplitudes 0.1 (smallest radius of curvature 36 px) and 0.2 (24 px at the lobes, 14 px \
          in the bays); pentagon of circumradius 160 measured without breaks given (`polygon`: the corners the fit finds itself, `FitConfig::find_corners`) and \

@@ -33,8 +33,8 @@ pub struct Row {
     /// Stable readable id: `shape/blurB/noiseN/Dbit/polarity/start[/paper-stages]`.
     pub id: String,
     /// Shape name; an encoded image's is followed by its tone curve
-    /// (`disc srgb`), an astigmatic one's by `astigmatic`, so that the
-    /// report counts them apart.
+    /// (`disc srgb`), an astigmatic one's by `astigmatic`, a shaded one's
+    /// by `shaded`, so that the report counts them apart.
     pub shape: String,
     /// `silhouette` or `contour`.
     pub kind: String,
@@ -295,10 +295,11 @@ fn row(case: &Case, outcome: &str, message: String, f: Figures, seconds: f64) ->
     };
     Row {
         id: case.id.clone(),
-        shape: match (img.tone.is_identity(), img.blur_y) {
-            (true, None) => img.shape.name(),
-            (true, Some(_)) => format!("{} astigmatic", img.shape.name()),
-            (false, _) => format!("{} {}", img.shape.name(), img.tone),
+        shape: match (img.tone.is_identity(), img.blur_y, img.shading.is_even()) {
+            (true, None, true) => img.shape.name(),
+            (true, None, false) => format!("{} shaded", img.shape.name()),
+            (true, Some(_), _) => format!("{} astigmatic", img.shape.name()),
+            (false, _, _) => format!("{} {}", img.shape.name(), img.tone),
         },
         kind: format!("{:?}", img.shape.kind()).to_lowercase(),
         polarity: if img.bright { "bright" } else { "dark" }.into(),
