@@ -25,6 +25,29 @@ impl Buckets {
         ((p[0] / size).floor() as i64, (p[1] / size).floor() as i64)
     }
 
+    /// Whether a point lies within `r` (at most the buckets' size) of `q`
+    /// ([`Buckets::within`] without listing them).
+    pub(crate) fn any_within(
+        &self,
+        point: impl Fn(usize) -> [f64; 2],
+        q: [f64; 2],
+        r: f64,
+    ) -> bool {
+        let (bx, by) = Self::key(q, self.size);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                self.map
+                    .get(&(bx + dx, by + dy))
+                    .into_iter()
+                    .flatten()
+                    .any(|&k| {
+                        let p = point(k);
+                        (p[0] - q[0]).hypot(p[1] - q[1]) <= r
+                    })
+            })
+        })
+    }
+
     /// The indices of the points within `r` (at most the buckets' size)
     /// of `q`; `point(k)` is point `k` as given to [`Buckets::new`].
     pub(crate) fn within(
@@ -74,6 +97,7 @@ mod tests {
                     .filter(|&k| (points[k][0] - q[0]).hypot(points[k][1] - q[1]) <= r)
                     .collect();
                 assert_eq!(found, scan, "{q:?} {r}");
+                assert_eq!(buckets.any_within(|k| points[k], q, r), !scan.is_empty());
             }
         }
     }
