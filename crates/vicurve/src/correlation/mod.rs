@@ -370,8 +370,8 @@ pub(crate) struct Correlation {
     /// Gray levels that vary along the curve ([`LevelModel::Varying`]);
     /// `None`: the global pair.
     varying: Option<Box<varying::Varying>>,
-    /// With the global pair and the pixel-edge profile: the light's tilt
-    /// across the band, already taken out of the pushed values (see
+    /// With the global pair and a pixel profile (an edge's, a thin
+    /// line's): the light's tilt across the band, already taken out of the pushed values (see
     /// `new_pushed`); the varying levels keep theirs.
     global_tilt: Option<MeasuredTilt>,
     /// The band of `M0^-1` ([`BandCholesky::inverse_band`]), made on the
@@ -538,8 +538,7 @@ impl Correlation {
     }
 
     /// The light's tilt this system measured or took (`None` without a
-    /// pixel-edge profile, or on a curve too short for the levels'
-    /// elements).
+    /// pixel profile, or on a curve too short for the levels' elements).
     pub fn measured_tilt(&self) -> Option<&MeasuredTilt> {
         match &self.varying {
             Some(var) => var.measured_tilt.as_ref(),
@@ -578,7 +577,7 @@ impl Correlation {
         corr.censored = sampler
             .clip_levels()
             .and_then(|clip| Censored::find(&values, clip, || sampler.pixel_noise()));
-        let Profile::PixelEdge { blur, .. } = corr.band.profile() else {
+        let Some(tail) = tilt::tail_end(corr.band.profile()) else {
             corr.pushed = Some(values);
             return Ok(corr);
         };
@@ -594,8 +593,8 @@ impl Correlation {
             return Ok(corr);
         };
         let measured = match known_tilt {
-            Some(m) if m.serves(&lb, blur) => m.clone(),
-            _ => tilt::estimate(&corr.band, sampler, &lb, blur),
+            Some(m) if m.serves(&lb, tail) => m.clone(),
+            _ => tilt::estimate(&corr.band, sampler, &lb, tail),
         };
         let tau = measured
             .coefs

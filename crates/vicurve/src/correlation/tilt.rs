@@ -1,6 +1,6 @@
-//! The light's tilt across the band, for the pixel-edge profile (pushed):
-//! a factor of the virtual image with varying gray levels, taken out of
-//! the pixels' values with the global pair.
+//! The light's tilt across the band, for the pixel profiles (pushed: an
+//! edge's, a thin line's): a factor of the virtual image with varying gray
+//! levels, taken out of the pixels' values with the global pair.
 //!
 //! Uneven light does not only change the levels along the curve: across
 //! it, each plateau slopes too. With the light `L` varying smoothly, the
@@ -16,9 +16,10 @@
 //! image is flat: on each side of every band pixel near the curve
 //! (`|r| <= NEAR` px), a line `alpha + beta r` is fitted to the pixels
 //! nearest the normal from `r_in` to `r_in + PLATEAU_WIDTH` px out (their
-//! own values, not interpolated ones), with `r_in` past the band and
-//! four blur deviations and 2 px, so that the edge's tail does not pass
-//! for a slope; `tau = (beta_in + beta_out) / (alpha_in + alpha_out)`. These
+//! own values, not interpolated ones), with `r_in` past the band and the
+//! profile's tail ([`tail_end`]: four blur deviations and 2 px beyond the
+//! edge, or beyond a line's side), so that the tail does not pass for a
+//! slope; `tau = (beta_in + beta_out) / (alpha_in + alpha_out)`. These
 //! estimates are fitted by least squares twice: with one value all along
 //! the curve, and with a B-spline basis along `s` (the levels' default
 //! elements, whatever the levels' own), kept when it explains more than
@@ -43,6 +44,7 @@ use crate::correlation::levels::LevelBasis;
 use crate::interp::Sampler;
 use crate::solver::chunked::chunked_sum;
 use crate::solver::DenseCholesky;
+use crate::virtual_image::Profile;
 use rayon::prelude::*;
 
 /// Band pixels within this of the curve (pixels) estimate the tilt: a
@@ -86,27 +88,50 @@ const NOISE_SDS: f64 = 5.0;
 /// again.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Measured {
-    /// The edge's blur the plateaus were placed with, pixels.
-    pub blur: f64,
+    /// Where the profile's tail ends, pixels from the curve
+    /// ([`tail_end`]): the plateaus lie beyond it (and the band).
+    pub tail: f64,
     /// `tau`'s coefficients in the levels' basis; `None`: no tilt.
     pub coefs: Option<Vec<f64>>,
 }
 
 impl Measured {
     /// Whether this measurement serves a band with the levels' basis
-    /// `levels` and the edge's `blur`: the same blur (a wider one places
-    /// the plateaus further out) and as many levels functions.
-    pub(crate) fn serves(&self, levels: &LevelBasis, blur: f64) -> bool {
-        self.blur == blur && self.coefs.as_ref().is_none_or(|c| c.len() == levels.m())
+    /// `levels` and a profile whose tail ends at `tail` px: the same tail
+    /// (a wider blur or line places the plateaus further out) and as many
+    /// levels functions.
+    pub(crate) fn serves(&self, levels: &LevelBasis, tail: f64) -> bool {
+        self.tail == tail && self.coefs.as_ref().is_none_or(|c| c.len() == levels.m())
+    }
+
+    /// A tilt measured before (`coefs`) for the pixel profile `profile`;
+    /// `None` for a profile without a tilt ([`tail_end`]).
+    pub(crate) fn known(profile: Profile, coefs: Option<Vec<f64>>) -> Option<Measured> {
+        tail_end(profile).map(|tail| Measured { tail, coefs })
     }
 }
 
+/// Where the tail of the pixel profile `profile` ends, pixels from the
+/// curve: `TAIL_DEVIATIONS` blur deviations and `TAIL_MARGIN` beyond the
+/// edge, or beyond each side of a thin line (its half-width out), so that
+/// the tail does not pass for a slope. `None` for the paper's profiles,
+/// whose band is their whole extent (no tilt).
+pub(crate) fn tail_end(profile: Profile) -> Option<f64> {
+    let (blur, half_line) = match profile {
+        Profile::PixelEdge { blur, .. } => (blur, 0.0),
+        Profile::PixelLine { blur, width } => (blur, 0.5 * width),
+        Profile::Paper { .. } => return None,
+    };
+    Some(half_line + TAIL_DEVIATIONS * blur + TAIL_MARGIN)
+}
+
 /// `tau`'s coefficients in the levels' basis (module docs), `None` when it
-/// cannot be measured. `blur` is the edge's blur (pixels).
-pub(crate) fn estimate(band: &Band, sampler: &Sampler, levels: &LevelBasis, blur: f64) -> Measured {
+/// cannot be measured. `tail`: where the profile's tail ends, pixels
+/// ([`tail_end`]).
+pub(crate) fn estimate(band: &Band, sampler: &Sampler, levels: &LevelBasis, tail: f64) -> Measured {
     Measured {
-        blur,
-        coefs: coefficients(band, sampler, levels, blur),
+        tail,
+        coefs: coefficients(band, sampler, levels, tail),
     }
 }
 
@@ -128,9 +153,9 @@ fn coefficients(
     band: &Band,
     sampler: &Sampler,
     levels: &LevelBasis,
-    blur: f64,
+    tail: f64,
 ) -> Option<Vec<f64>> {
-    let r_in = (band.half_width() + 0.5).max(TAIL_DEVIATIONS * blur + TAIL_MARGIN);
+    let r_in = (band.half_width() + 0.5).max(tail);
     let count = (PLATEAU_WIDTH / PLATEAU_STEP).round() as usize + 1;
     let plateaus = Plateaus::new(band, r_in, count);
     let m = levels.m();

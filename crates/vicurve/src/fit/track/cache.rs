@@ -205,11 +205,8 @@ impl BandRecord {
             size.1,
             coords,
         )?;
-        let tilt = MeasuredTilt {
-            blur: self.blur,
-            coefs: self.tilt,
-        };
-        let mut corr = Correlation::prepare(band, basis, sampler, self.levels, Some(&tilt))?;
+        let tilt = MeasuredTilt::known(profile, self.tilt);
+        let mut corr = Correlation::prepare(band, basis, sampler, self.levels, tilt.as_ref())?;
         if let Some(q) = self.contraction {
             corr.observe_contraction(q);
         }
