@@ -371,8 +371,9 @@ pub(crate) struct Correlation {
     /// `None`: the global pair.
     varying: Option<Box<varying::Varying>>,
     /// With the global pair and a pixel profile (an edge's, a thin
-    /// line's): the light's tilt across the band, already taken out of the pushed values (see
-    /// `new_pushed`); the varying levels keep theirs.
+    /// line's): the light's tilt across the band, already taken out of
+    /// the pushed values (see `new_pushed`); the varying levels keep
+    /// theirs.
     global_tilt: Option<MeasuredTilt>,
     /// The band of `M0^-1` ([`BandCholesky::inverse_band`]), made on the
     /// first [`Self::position_sigma`].

@@ -14,7 +14,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
 
-/// Uneven light (module docs). The default is even light.
+/// Uneven light (module docs). The default is even light. Light it
+/// raises above 1 clips when the image is quantised, as a saturated
+/// sensor's does.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Shading {
