@@ -25,50 +25,26 @@ impl Buckets {
         ((p[0] / size).floor() as i64, (p[1] / size).floor() as i64)
     }
 
-    /// Whether a point lies within `r` (at most the buckets' size) of `q`
-    /// ([`Buckets::within`] without listing them).
-    pub(crate) fn any_within(
-        &self,
-        point: impl Fn(usize) -> [f64; 2],
-        q: [f64; 2],
-        r: f64,
-    ) -> bool {
-        let (bx, by) = Self::key(q, self.size);
-        (-1..=1).any(|dx| {
-            (-1..=1).any(|dy| {
-                self.map
-                    .get(&(bx + dx, by + dy))
-                    .into_iter()
-                    .flatten()
-                    .any(|&k| {
-                        let p = point(k);
-                        (p[0] - q[0]).hypot(p[1] - q[1]) <= r
-                    })
-            })
-        })
-    }
-
     /// The indices of the points within `r` (at most the buckets' size)
-    /// of `q`; `point(k)` is point `k` as given to [`Buckets::new`].
-    pub(crate) fn within(
-        &self,
-        point: impl Fn(usize) -> [f64; 2],
+    /// of `q`, lazily (bucket by bucket, in no particular order); `point(k)`
+    /// is point `k` as given to [`Buckets::new`]. `.next().is_some()` asks
+    /// whether there is any.
+    pub(crate) fn within<'a>(
+        &'a self,
+        point: impl Fn(usize) -> [f64; 2] + 'a,
         q: [f64; 2],
         r: f64,
-    ) -> Vec<usize> {
+    ) -> impl Iterator<Item = usize> + 'a {
         let (bx, by) = Self::key(q, self.size);
-        let mut out = Vec::new();
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for &k in self.map.get(&(bx + dx, by + dy)).into_iter().flatten() {
-                    let p = point(k);
-                    if (p[0] - q[0]).hypot(p[1] - q[1]) <= r {
-                        out.push(k);
-                    }
-                }
-            }
-        }
-        out
+        (-1..=1)
+            .flat_map(move |dx| (-1..=1).map(move |dy| (bx + dx, by + dy)))
+            .filter_map(|key| self.map.get(&key))
+            .flatten()
+            .copied()
+            .filter(move |&k| {
+                let p = point(k);
+                (p[0] - q[0]).hypot(p[1] - q[1]) <= r
+            })
     }
 }
 
@@ -91,13 +67,16 @@ mod tests {
         let buckets = Buckets::new(points.iter().copied(), 3.0);
         for q in [[50.0, 40.0], [80.2, 41.3], [20.0, 20.0], [-5.0, 0.0]] {
             for r in [0.5, 1.7, 3.0] {
-                let mut found = buckets.within(|k| points[k], q, r);
+                let mut found: Vec<usize> = buckets.within(|k| points[k], q, r).collect();
                 found.sort_unstable();
                 let scan: Vec<usize> = (0..points.len())
                     .filter(|&k| (points[k][0] - q[0]).hypot(points[k][1] - q[1]) <= r)
                     .collect();
                 assert_eq!(found, scan, "{q:?} {r}");
-                assert_eq!(buckets.any_within(|k| points[k], q, r), !scan.is_empty());
+                assert_eq!(
+                    buckets.within(|k| points[k], q, r).next().is_some(),
+                    !scan.is_empty()
+                );
             }
         }
     }

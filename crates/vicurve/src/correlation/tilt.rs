@@ -60,6 +60,8 @@ const NEAR: f64 = 0.25;
 const PLATEAU_WIDTH: f64 = 8.0;
 /// Spacing of the samples on a plateau, pixels.
 const PLATEAU_STEP: f64 = 0.5;
+/// Samples on a plateau, from its start to its end.
+const PLATEAU_SAMPLES: usize = (PLATEAU_WIDTH / PLATEAU_STEP) as usize + 1;
 /// Blur deviations between the edge and the plateau samples (plus
 /// `TAIL_MARGIN` px, for the pixels' size and their offset from the
 /// normal): the edge's tail must not pass for a slope.
@@ -156,8 +158,7 @@ fn coefficients(
     tail: f64,
 ) -> Option<Vec<f64>> {
     let r_in = (band.half_width() + 0.5).max(tail);
-    let count = (PLATEAU_WIDTH / PLATEAU_STEP).round() as usize + 1;
-    let plateaus = Plateaus::new(band, r_in, count);
+    let plateaus = Plateaus::new(band, r_in);
     let m = levels.m();
     let width = levels.width();
     // Right-hand sides of the three fits: both sides together, the outer
@@ -231,19 +232,18 @@ fn coefficients(
     }
 }
 
-/// Where the plateaus lie: from `r_in` px out, `count` samples, and
+/// Where the plateaus lie: from `r_in` px out, and
 /// the curve's points (the feet of the band pixels near it) to tell
 /// whether a plateau stays clear of the curve's other parts.
 struct Plateaus<'a> {
     band: &'a Band,
     r_in: f64,
-    count: usize,
     feet: Vec<[f64; 2]>,
     buckets: Buckets,
 }
 
 impl<'a> Plateaus<'a> {
-    fn new(band: &'a Band, r_in: f64, count: usize) -> Plateaus<'a> {
+    fn new(band: &'a Band, r_in: f64) -> Plateaus<'a> {
         let feet: Vec<[f64; 2]> = (0..band.len())
             .filter(|&i| band.r[i].abs() <= FOOT_NEAR)
             .map(|i| {
@@ -256,7 +256,6 @@ impl<'a> Plateaus<'a> {
         Plateaus {
             band,
             r_in,
-            count,
             feet,
             buckets,
         }
@@ -269,9 +268,10 @@ impl<'a> Plateaus<'a> {
     fn clear(&self, foot: [f64; 2], dir: [f64; 2]) -> bool {
         let reach = self.r_in + PLATEAU_WIDTH;
         let end = [foot[0] + reach * dir[0], foot[1] + reach * dir[1]];
-        !self
-            .buckets
-            .any_within(|k| self.feet[k], end, reach - CLEARANCE)
+        self.buckets
+            .within(|k| self.feet[k], end, reach - CLEARANCE)
+            .next()
+            .is_none()
     }
 }
 
@@ -350,9 +350,7 @@ impl Fit {
 /// the curve, or a plateau leaves the image or comes near another part
 /// of the curve.
 fn pixel_tilts(plateaus: &Plateaus, sampler: &Sampler, i: usize) -> Option<[f64; 3]> {
-    let Plateaus {
-        band, r_in, count, ..
-    } = *plateaus;
+    let Plateaus { band, r_in, .. } = *plateaus;
     let r0 = band.r[i];
     if r0.abs() > NEAR {
         return None;
@@ -367,7 +365,7 @@ fn pixel_tilts(plateaus: &Plateaus, sampler: &Sampler, i: usize) -> Option<[f64;
         // Least-squares line v = alpha + beta r over the plateau, and its
         // mean.
         let (mut s1, mut sr, mut srr, mut sv, mut srv) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for k in 0..count {
+        for k in 0..PLATEAU_SAMPLES {
             let t = sign * (r_in + k as f64 * PLATEAU_STEP);
             // The nearest pixel centre: between centres the cubic
             // interpolant rings after the edge (by ~0.27^d of the

@@ -559,7 +559,6 @@ impl LocalShapeError {
     pub fn at(&self, p: [f64; 2]) -> f64 {
         self.buckets
             .within(|k| self.points[k], p, LOOKUP_REACH)
-            .into_iter()
             .map(|k| self.values[k])
             .fold(0.0, f64::max)
     }

@@ -430,7 +430,6 @@ fn seed_basis(
         let p = valid[k].1;
         let near: Vec<[f64; 2]> = index
             .within(|j| valid[j].1, p, 1.4 * spacing)
-            .into_iter()
             .filter(|&j| j != k)
             .map(|j| [valid[j].1[0] - p[0], valid[j].1[1] - p[1]])
             .collect();
@@ -460,7 +459,6 @@ fn nearest(index: &Buckets, valid: &[(usize, [f64; 2])], q: [f64; 2], r: f64) ->
     let d = |k: usize| (valid[k].1[0] - q[0]).hypot(valid[k].1[1] - q[1]);
     index
         .within(|k| valid[k].1, q, r)
-        .into_iter()
         .min_by(|&a, &b| d(a).total_cmp(&d(b)))
 }
 
@@ -470,7 +468,6 @@ fn nearest_other(index: &Buckets, valid: &[(usize, [f64; 2])], k: usize, r: f64)
     let q = valid[k].1;
     index
         .within(|j| valid[j].1, q, r)
-        .into_iter()
         .filter(|&j| j != k)
         .map(|j| (valid[j].1[0] - q[0]).hypot(valid[j].1[1] - q[1]))
         .min_by(f64::total_cmp)
