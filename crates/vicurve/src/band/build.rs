@@ -268,10 +268,21 @@ impl Band {
         }
         let reach = params.half_width + params.margin;
         // A dot or hole near the border: its band is the pixels in the
-        // image (`Band::new`).
-        let clipped = match check_inside(curve, reach, params.width, params.height) {
+        // image (`Band::new`); so is an open curve's band beyond a pushed
+        // profile's transition, when that lies in the image.
+        let (width, height) = (params.width, params.height);
+        let clipped = match check_inside(curve, reach, width, height) {
+            Ok(()) => false,
             Err(Error::BandOutsideImage { .. }) if curve.is_closed() => true,
-            checked => checked.map(|()| false)?,
+            Err(e @ Error::BandOutsideImage { .. }) => match params.profile.transition_half_width()
+            {
+                Some(core) if core + params.margin < reach => {
+                    check_inside(curve, core + params.margin, width, height)?;
+                    true
+                }
+                _ => return Err(e),
+            },
+            Err(e) => return Err(e),
         };
         let blurred_curvature = match params.profile {
             Profile::PixelEdge { blur, .. } | Profile::PixelLine { blur, .. } => {

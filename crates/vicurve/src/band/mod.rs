@@ -247,8 +247,12 @@ impl Band {
     /// corner's tip cut off by the frame is measured from the sides
     /// leading to it); [`crate::Error::BandOutsideImage`] when an open
     /// curve's band (out to `half_width + margin`) does (an open curve is
-    /// trimmed where its band leaves, `fit`'s reference). A closed curve's
-    /// band may be cut by the border (a dot or a hole near it): it is then
+    /// trimmed where its band leaves, `fit`'s reference), or for a pushed
+    /// profile the band out to its transition
+    /// ([`Profile::transition_half_width`] plus margin). A closed curve's
+    /// band may be cut by the border (a dot or a hole near it), and so may
+    /// a pushed profile's beyond its transition (a noisy image's wide
+    /// band, whose flat levels there only fix the gray levels): it is then
     /// the band's pixels in the image ([`Band::clipped`]). With
     /// [`Coords::Levelset`], those of [`levelset::LevelsetCoords::build`].
     pub fn new(curve: &SplineCurve, basis: &Basis, params: &BandParams) -> Result<Band> {

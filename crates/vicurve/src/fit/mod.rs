@@ -94,7 +94,8 @@ use crate::image::Image;
 use crate::interp::Sampler;
 use crate::tone::Tone;
 use crate::virtual_image::Kind;
-use blur::{pixel_edge_band, BLUR_TOLERANCE};
+pub(crate) use blur::pixel_edge_band;
+use blur::BLUR_TOLERANCE;
 use schedule::run_schedule;
 
 /// Measure the curve in `image` starting from `init`.

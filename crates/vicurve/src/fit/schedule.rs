@@ -299,12 +299,12 @@ impl<'s> Schedule<'s> {
     /// band clear of its other parts: [`Self::band_limit`], at most half
     /// the smallest radius of curvature (sampled every pixel of the
     /// parameter), and 0 for a curve with corners, where a band's plateau
-    /// would take in the edge beyond the corner, and for an open curve,
-    /// whose ends are trimmed where the band leaves the image (a wider band
-    /// would keep them further from the border).
+    /// would take in the edge beyond the corner. An open curve's ends are
+    /// trimmed where the narrow band leaves the image, the wider band's
+    /// flat levels cut by the border there (`Band::new`).
     fn clear_band_limit(&self) -> f64 {
         let curve = &self.current;
-        if !curve.is_closed() || !curve.corners().is_empty() {
+        if !curve.corners().is_empty() {
             return 0.0;
         }
         self.band_limit().min(0.5 / curve.largest_curvature(1.0))

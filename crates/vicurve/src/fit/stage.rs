@@ -608,8 +608,8 @@ impl Schedule<'_> {
     }
 
     /// An open reference trimmed to the stretch whose band of half-width
-    /// `r` (and margin, for the `pushed` profile of a tracked frame) fits in
-    /// the image (from the whole curve it was cut from, if it was already
+    /// `r` (for a `pushed` profile, out to its transition if narrower; and
+    /// margin, for a tracked frame) fits in the image (from the whole curve it was cut from, if it was already
     /// trimmed: a trim is for one run); the parts cut off are kept for its
     /// next reference ([`next_reference`]). A closed curve, or one whose
     /// band fits whole, stays as it is.
@@ -625,8 +625,12 @@ impl Schedule<'_> {
         } else {
             (self.config.rereference_fraction * r).min(PULLED_MARGIN)
         };
+        // A pushed profile's band may lose the flat levels beyond its
+        // transition to the border (`Band::new`): the ends are trimmed
+        // where the transition leaves the image.
+        let core = pushed.and_then(Profile::transition_half_width);
         let clip = Clip {
-            half_width: r + self.band_margin(pushed),
+            half_width: core.map_or(r, |c| c.min(r)) + self.band_margin(pushed),
             margin: TRIM_MARGIN + pulled,
             width: self.sampler.width(),
             height: self.sampler.height(),

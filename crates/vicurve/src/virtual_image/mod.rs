@@ -162,6 +162,24 @@ impl Profile {
         }
     }
 
+    /// How far from the curve (pixels) a pushed profile's band must lie in
+    /// the image: the transition, out to the narrow band a noiseless image
+    /// takes (`fit::blur::pixel_edge_band`). Beyond it, a noisy image's
+    /// wider band adds pixels of the flat levels, there to fix the gray
+    /// levels; an open curve's band may lose those to the image border
+    /// (`band::Band::new`), and its ends are trimmed only where this part
+    /// leaves the image. `None` for the paper's profiles, whose band must
+    /// lie in the image whole.
+    pub fn transition_half_width(self) -> Option<f64> {
+        match self {
+            Profile::PixelEdge { blur, .. } => Some(crate::fit::pixel_edge_band(blur)),
+            Profile::PixelLine { blur, width } => {
+                Some(0.5 * width + crate::fit::pixel_edge_band(blur))
+            }
+            Profile::Paper { .. } => None,
+        }
+    }
+
     /// `(gamma, d gamma / d r)` at signed distance `r` (pixels) from the
     /// curve, for a band of half-width `half_width` (pixels), at a point whose
     /// closest point on the curve has unit normal `normal` and signed

@@ -156,6 +156,64 @@ fn a_band_cut_by_the_border_and_a_curve_outside_the_image() {
     ));
 }
 
+/// An open curve's pixel-edge band may be cut by the border beyond the
+/// profile's transition (a noisy image's wide band, whose flat levels
+/// there only fix the gray levels): it keeps the pixels in the image, the
+/// same as in a wider image. The paper's profile, whose band is all
+/// transition, and a transition that leaves the image, are errors.
+#[test]
+fn an_open_pixel_edge_band_is_cut_by_the_border_beyond_its_transition() {
+    use vicurve::virtual_image::Profile;
+    // Tilted by 30 degrees: at its end, x = 97, a 10 px band reaches x =
+    // 102, past the last pixel centre, its transition (3.25 px at a 1 px
+    // blur) x = 98.6.
+    let segment = |x1: f64| {
+        InitialCurve::Segment {
+            x0: 30.0,
+            y0: 50.3,
+            x1,
+            y1: 50.3 + (x1 - 30.0) * 30f64.to_radians().tan(),
+        }
+        .to_curve()
+        .unwrap()
+    };
+    let curve = segment(97.0);
+    let basis = Basis::new(3, 4, curve.param_length(), false).unwrap();
+    let edge = Profile::pixel_edge(1.0);
+    assert_eq!(edge.transition_half_width(), Some(3.25));
+    let cut = Band::build(&curve, &basis, 10.0, edge, 100, 100).unwrap();
+    let fits = Band::build(&curve, &basis, 10.0, edge, 150, 100).unwrap();
+    assert!(cut.clipped() && !fits.clipped());
+    let inside = |p: &[f64; 2]| p[0] <= 99.0;
+    assert!(cut.positions().iter().all(inside));
+    let kept: Vec<([f64; 2], f64)> = fits
+        .positions()
+        .iter()
+        .zip(fits.r())
+        .filter(|(p, _)| inside(p))
+        .map(|(p, &r)| (*p, r))
+        .collect();
+    let got: Vec<([f64; 2], f64)> = cut
+        .positions()
+        .iter()
+        .zip(cut.r())
+        .map(|(p, &r)| (*p, r))
+        .collect();
+    assert!(got.len() < fits.len(), "{} of {}", got.len(), fits.len());
+    assert_eq!(got, kept);
+    assert!(matches!(
+        Band::build(&curve, &basis, 10.0, Kind::Silhouette, 100, 100),
+        Err(Error::BandOutsideImage { .. })
+    ));
+    // Ending at the last pixel centre, the transition leaves the image.
+    let curve = segment(99.0);
+    let basis = Basis::new(3, 4, curve.param_length(), false).unwrap();
+    assert!(matches!(
+        Band::build(&curve, &basis, 10.0, edge, 100, 100),
+        Err(Error::BandOutsideImage { .. })
+    ));
+}
+
 /// A band with a margin holds the pixels out to `R + margin` and counts
 /// those within `R` of the curve displaced by `U` (here uniform: the basis
 /// is a partition of unity), with their full weights.
