@@ -388,14 +388,21 @@ pub(super) fn bend_element(reference: &SplineCurve, blur: f64) -> Option<f64> {
     if !reference.corners().is_empty() || !within_curved_edge_reach(reference, blur) {
         return None;
     }
+    sharpest_bend(reference).map(|largest| (MAX_ELEMENT_TURN / largest).max(MIN_BEND_ELEMENT))
+}
+
+/// The largest curvature of `reference` (1/px, sampled every
+/// `CURVATURE_STEP` of its parameter) when it is a bend, not a corner not
+/// yet declared: at most [`MAX_BEND_CONCENTRATION`] times the mean of the
+/// curvature's magnitude; `None` for such a corner (or a straight curve).
+pub(super) fn sharpest_bend(reference: &SplineCurve) -> Option<f64> {
     let l = reference.param_length();
     let n = (l / CURVATURE_STEP).ceil().max(1.0) as usize;
     let (largest, sum) = (0..n)
         .map(|i| reference.frame(i as f64 * l / n as f64).curvature.abs())
         .fold((0.0, 0.0), |(m, s), k| (f64::max(m, k), s + k));
     let mean = sum / n as f64;
-    (largest > 0.0 && largest <= MAX_BEND_CONCENTRATION * mean)
-        .then(|| (MAX_ELEMENT_TURN / largest).max(MIN_BEND_ELEMENT))
+    (largest > 0.0 && largest <= MAX_BEND_CONCENTRATION * mean).then_some(largest)
 }
 
 /// The largest turn of the tangent along one element, radians
