@@ -199,7 +199,7 @@ fn textured_star() {
     // under the scatter. Not asserted: a known fault (see docs).
     println!(
         "  textured star: scatter / sigma {:.2}",
-        e.scatter / sigma_rms(&m)
+        e.scatter / crate::common::rms_sigma(&m)
     );
     // Without texture the same star is measured ten times better: the
     // figures above are the texture's.
@@ -506,11 +506,6 @@ fn textured_star_over_texture_draws() {
     }
 }
 
-/// RMS of the samples' reported `sigma`, px.
-fn sigma_rms(m: &Measurement) -> f64 {
-    (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / m.samples.len() as f64).sqrt()
-}
-
 /// A 1212x1212 disc whose surface carries a strong fine texture (deviation
 /// half the contrast, correlation length 1.5 px) on a lightly textured
 /// ground, from the automatic start. The last stage's settles chase the
@@ -552,7 +547,7 @@ fn strongly_textured_disc_keeps_an_honest_sigma() {
             .all(|s| s.sigma.is_finite() && s.sigma > 0.0),
         "a sample without sigma"
     );
-    let ratio = e.scatter / sigma_rms(&m);
+    let ratio = e.scatter / crate::common::rms_sigma(&m);
     println!("  scatter / sigma {ratio:.2}");
     assert!((0.5..2.5).contains(&ratio), "{ratio}");
     assert!(e.bias.abs() < 0.3 && e.scatter < 1.0, "{e:?}");

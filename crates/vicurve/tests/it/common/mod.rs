@@ -82,6 +82,12 @@ pub fn median_sigma(m: &Measurement) -> f64 {
     sigmas.get(sigmas.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
+/// The RMS of the samples' `sigma` of `m` (px): what the scatter of the
+/// curve's errors is compared with. NaN without samples.
+pub fn rms_sigma(m: &Measurement) -> f64 {
+    (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / m.samples.len() as f64).sqrt()
+}
+
 /// A 3 x 3 grid of dots of radius `r` px, `pitch` px apart, in a 96 x 96
 /// image, the middle one at (48.3, 47.6) off the pixel grid: gray 0.8 on
 /// 0.2, blur `blur` px, 0.6 % noise, 8 bits.

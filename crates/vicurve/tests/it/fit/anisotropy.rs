@@ -28,8 +28,7 @@ fn measured(spec: &RenderSpec) -> (Measurement, f64, f64, f64) {
     let start = find_silhouette(&image, &StartConfig::default()).unwrap();
     let m = measure(&image, &start.curve, &FitConfig::default()).unwrap();
     let e = evaluate(&m.points(), &spec.shape).unwrap();
-    let n = m.samples.len() as f64;
-    let sigma = (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / n).sqrt();
+    let sigma = crate::common::rms_sigma(&m);
     (m, e.max_abs, e.scatter, sigma)
 }
 

@@ -50,20 +50,26 @@ fn mean_bias(shape: Shape, blur: f64, noise: f64, dark: bool, seeds: u64) -> (f6
     (mean, (var / n).sqrt(), var.sqrt())
 }
 
+/// The edge `y = y0 + 12 sin(2 pi x / 300 + 0.7)` across a 512 px wide
+/// image.
+fn sine_edge(y0: f64) -> Shape {
+    Shape::Sine {
+        y0,
+        amplitude: 12.0,
+        wavelength: 300.0,
+        phase: 0.7,
+        x_min: 0.0,
+        x_max: 511.0,
+    }
+}
+
 /// The bounds (2e-3 px for blur <= 2 px and noise <= 2 %, 5e-3 px
 /// beyond) on the mean over 16 seeds; the standard error must be well under
 /// the bound, or the test could not fail.
 #[test]
 fn noisy_blurred_curved_edges_are_unbiased_on_average() {
     let (cx, cy) = (255.83, 255.21);
-    let sine = Shape::Sine {
-        y0: cy,
-        amplitude: 12.0,
-        wavelength: 300.0,
-        phase: 0.7,
-        x_min: 0.0,
-        x_max: 511.0,
-    };
+    let sine = sine_edge(cy);
     let star = |amplitude| Shape::Star {
         cx,
         cy,
@@ -106,14 +112,7 @@ fn noisy_blurred_curved_edges_are_unbiased_on_average() {
 #[test]
 fn the_mean_position_scatters_near_its_bound() {
     let (cx, cy, r) = (255.83, 255.21, 150.0);
-    let sine = Shape::Sine {
-        y0: cy,
-        amplitude: 12.0,
-        wavelength: 300.0,
-        phase: 0.7,
-        x_min: 0.0,
-        x_max: 511.0,
-    };
+    let sine = sine_edge(cy);
     let (blur, noise) = (2.0, 0.02);
     for (name, shape) in [("disc", Shape::Circle { cx, cy, r }), ("sine edge", sine)] {
         let length: f64 = shape

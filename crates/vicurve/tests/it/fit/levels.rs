@@ -218,8 +218,7 @@ fn star_in_a_vignetted_field_gets_shorter_level_elements() {
     let m = measure(&image, &init, &FitConfig::default()).unwrap();
     assert_eq!(m.outcome, Outcome::Converged);
     let stats = evaluate(&m.points(), &star).unwrap();
-    let n = m.samples.len() as f64;
-    let sigma = (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / n).sqrt();
+    let sigma = crate::common::rms_sigma(&m);
     eprintln!(
         "vignetted star: bias {:+.2e} scatter {:.2e} max {:.2e} sigma {sigma:.2e}, \
          {} level samples",
@@ -421,8 +420,7 @@ fn levels_are_shortened_once_the_curve_fits() {
         let m = measure(&image, &init, &FitConfig::default()).unwrap();
         assert_eq!(m.outcome, Outcome::Converged);
         let stats = evaluate(&m.points(), &star).unwrap();
-        let n = m.samples.len() as f64;
-        let sigma = (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / n).sqrt();
+        let sigma = crate::common::rms_sigma(&m);
         eprintln!(
             "seed {seed}: scatter {:.2e} sigma {sigma:.2e} bias {:+.2e}",
             stats.scatter, stats.bias

@@ -38,8 +38,7 @@ fn measured(spec: &RenderSpec, config: &FitConfig) -> (Measurement, f64, f64) {
         r: 150.0,
     };
     let m = measure(&render(spec).unwrap(), &init, config).unwrap();
-    let n = m.samples.len() as f64;
-    let sigma = (m.samples.iter().map(|s| s.sigma * s.sigma).sum::<f64>() / n).sqrt();
+    let sigma = crate::common::rms_sigma(&m);
     let bias = mean_error(&m, spec);
     (m, bias, sigma)
 }
