@@ -613,10 +613,11 @@ impl Schedule<'_> {
 
     /// An open reference trimmed to the stretch whose band of half-width
     /// `r` (for a `pushed` profile, out to its transition if narrower; and
-    /// margin, for a tracked frame) fits in the image (from the whole curve it was cut from, if it was already
-    /// trimmed: a trim is for one run); the parts cut off are kept for its
-    /// next reference ([`next_reference`]). A closed curve, or one whose
-    /// band fits whole, stays as it is.
+    /// margin, for a tracked frame) fits in the image (from the whole curve
+    /// it was cut from, if it was already trimmed: a trim is for one run);
+    /// the parts cut off are kept for its next reference
+    /// ([`next_reference`]). A closed curve, or one whose band fits whole,
+    /// stays as it is.
     ///
     /// A pulled profile samples the image at the band's pixels displaced
     /// by `U`: its band keeps up to [`PULLED_MARGIN`] further from the
