@@ -377,7 +377,7 @@ fn a_line_in_a_vignetted_field_is_not_moved_by_the_tilt() {
     }
 }
 
-/// A seven-lobed star (mean radius 95 px, amplitude 0.12: bays of 10 px
+/// A seven-lobed star (mean radius 95 px, amplitude 0.12: bays of 15 px
 /// radius) under light falling by 10 % across the 264 px image, blur 2.5
 /// px, 0.5 % noise, 8 bits, from a circle 5 px inside it. Along its
 /// lobes the light changes faster than levels of 128 px elements follow.
