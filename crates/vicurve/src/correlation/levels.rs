@@ -48,7 +48,9 @@ pub enum LevelModel {
     /// the elements asked for still follows light that changes across it),
     /// and takes them when they explain significantly more (light that
     /// changes faster along the curve, as a star's lobes run in and out of
-    /// a vignetted field; see `Correlation::levels_needed`).
+    /// a vignetted field; see `Correlation::levels_needed`). On a curve
+    /// without corners its later runs, once the curve fits, test again
+    /// and only ever shorten them.
     Varying {
         /// Length of the levels' elements along the curve, pixels (`>= 8`):
         /// the longest scale over which the light may change.
