@@ -8,8 +8,8 @@ use crate::correlation::Correlation;
 use crate::curve::SplineCurve;
 use crate::interp::Sampler;
 use crate::psf;
-use crate::virtual_image::pixel_edge::spread_variance;
 use crate::virtual_image::pixel_edge::MIN_BLUR;
+use crate::virtual_image::pixel_edge::{pixel_edge_band, spread_variance};
 use crate::virtual_image::{Anisotropy, Kind, Profile};
 
 /// Half-width of the first band on which the edge's blur is estimated,
@@ -45,19 +45,6 @@ pub(crate) const BLUR_TOLERANCE: f64 = 0.01;
 /// is the minimum to far better than `BLUR_TOLERANCE` when it lies within
 /// a probe of the middle (tested in `fit/track.rs`).
 const BLUR_PROBE: f64 = 0.02;
-/// The pixel-edge stage's band covers the pixel's largest extent along a
-/// normal (`sqrt(2) / 2` px), this many blur deviations and
-/// `PIXEL_EDGE_PLATEAU` px of the flat levels on each side, and is at least
-/// `PIXEL_EDGE_MIN_BAND` px wide. Narrow on purpose: the flat levels fix
-/// `a` and `c`, and on a noiseless 8-bit image a flat level rounded by up to
-/// half a gray level no longer lies on the line through the transition's
-/// levels; the wider its share of the band, the more the curve follows it
-/// (see docs/benchmarks.md).
-const PIXEL_EDGE_REACH: f64 = 2.0;
-/// See [`PIXEL_EDGE_REACH`], pixels.
-const PIXEL_EDGE_PLATEAU: f64 = 0.5;
-/// See [`PIXEL_EDGE_REACH`], pixels.
-const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
 /// On a noisy image the pixel-edge band reaches at least this many spreads
 /// `sqrt(v)` (`v = blur^2 + 1/12`) each side. The displacement's profile,
 /// a bell of unit area, overlaps the flat levels' constant with a squared
@@ -261,14 +248,6 @@ pub(super) fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
         return None;
     }
     Some(0.5 * (x[0] + x[1]) - d01 / (2.0 * a))
-}
-
-/// Half-width of the band of the pixel-edge stage for an optical blur of
-/// `blur` pixels (see the constants), rounded up to a quarter pixel: narrow,
-/// for noiseless images whose flat levels may sit between two gray levels.
-pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
-    let r = std::f64::consts::FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
-    (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
 }
 
 /// Half-width of the band of the pixel-edge stage (pixels, a quarter pixel

@@ -93,8 +93,8 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::interp::Sampler;
 use crate::tone::Tone;
+use crate::virtual_image::pixel_edge::pixel_edge_band;
 use crate::virtual_image::Kind;
-pub(crate) use blur::pixel_edge_band;
 use blur::BLUR_TOLERANCE;
 use schedule::run_schedule;
 

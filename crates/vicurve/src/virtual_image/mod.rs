@@ -164,7 +164,7 @@ impl Profile {
 
     /// How far from the curve (pixels) a pushed profile's band must lie in
     /// the image: the transition, out to the narrow band a noiseless image
-    /// takes (`fit::blur::pixel_edge_band`). Beyond it, a noisy image's
+    /// takes (`pixel_edge::pixel_edge_band`). Beyond it, a noisy image's
     /// wider band adds pixels of the flat levels, there to fix the gray
     /// levels; an open curve's band may lose those to the image border
     /// (`band::Band::new`), and its ends are trimmed only where this part
@@ -172,9 +172,9 @@ impl Profile {
     /// lie in the image whole.
     pub fn transition_half_width(self) -> Option<f64> {
         match self {
-            Profile::PixelEdge { blur, .. } => Some(crate::fit::pixel_edge_band(blur)),
+            Profile::PixelEdge { blur, .. } => Some(pixel_edge::pixel_edge_band(blur)),
             Profile::PixelLine { blur, width } => {
-                Some(0.5 * width + crate::fit::pixel_edge_band(blur))
+                Some(0.5 * width + pixel_edge::pixel_edge_band(blur))
             }
             Profile::Paper { .. } => None,
         }

@@ -60,6 +60,28 @@ pub(crate) const MIN_BLUR: f64 = 1e-3;
 /// The variance of a square pixel's own spread across an edge, px^2.
 const PIXEL_VARIANCE: f64 = 1.0 / 12.0;
 
+/// The pixel-edge stage's band covers the pixel's largest extent along a
+/// normal (`sqrt(2) / 2` px), this many blur deviations and
+/// `PIXEL_EDGE_PLATEAU` px of the flat levels on each side, and is at least
+/// `PIXEL_EDGE_MIN_BAND` px wide. Narrow on purpose: the flat levels fix
+/// `a` and `c`, and on a noiseless 8-bit image a flat level rounded by up to
+/// half a gray level no longer lies on the line through the transition's
+/// levels; the wider its share of the band, the more the curve follows it
+/// (see docs/benchmarks.md).
+const PIXEL_EDGE_REACH: f64 = 2.0;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_PLATEAU: f64 = 0.5;
+/// See [`PIXEL_EDGE_REACH`], pixels.
+const PIXEL_EDGE_MIN_BAND: f64 = 1.5;
+
+/// Half-width of the band of the pixel-edge stage for an optical blur of
+/// `blur` pixels (see the constants), rounded up to a quarter pixel: narrow,
+/// for noiseless images whose flat levels may sit between two gray levels.
+pub(crate) fn pixel_edge_band(blur: f64) -> f64 {
+    let r = FRAC_1_SQRT_2 + PIXEL_EDGE_REACH * blur + PIXEL_EDGE_PLATEAU;
+    (r.max(PIXEL_EDGE_MIN_BAND) * 4.0).ceil() / 4.0
+}
+
 /// The variance `v` of the whole spread across an edge under an optical
 /// blur of standard deviation `blur` (pixels): the blur's and the square
 /// pixel's own, px^2.
