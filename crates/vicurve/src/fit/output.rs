@@ -137,19 +137,22 @@ impl Final {
         let terms = SigmaTerms::new(self, sampler, (&params, &s), blur);
         let speed = self.reference.arc_length() / self.reference.param_length();
         let at: Vec<f64> = kept.iter().map(|&i| s[i]).collect();
+        let noise_terms: Vec<(f64, f64)> =
+            kept.par_iter().map(|&i| terms.at(i, params[i])).collect();
+        let noise: Vec<f64> = noise_terms.iter().map(|t| t.0).collect();
         let shapes = Representation::new(
             self.corr.basis().element_length() * speed,
             self.corr.basis().degree(),
             self.profile,
         )
-        .map(|r| r.along(&curve, &at));
+        .map(|r| r.along(&curve, &at, &noise));
         let (samples, seen): (Vec<Sample>, Vec<(bool, f64)>) = kept
             .par_iter()
             .enumerate()
             .map(|(k, &i)| {
                 let q = pts[i];
                 let f = curve.frame(s[i]);
-                let (sigma_noise, misfit) = terms.at(i, params[i]);
+                let (sigma_noise, misfit) = noise_terms[k];
                 let (misfit, seen) = terms.edge_checked(params[i], sigma_noise, misfit);
                 // The shape error the elements leave where the edge bends
                 // faster than they follow, here (`representation.rs`).

@@ -126,8 +126,11 @@ fn a_blurred_star_follows_its_bays() {
 /// has detail at its 9 px elements' scale in its own outline, which a
 /// check of the curve's second differences took for an oscillation (385
 /// samples flagged, sigma 8.3e-3 px against a scatter of 3.6e-3, measured
-/// before; from a circle at the star's radius, nothing flagged). No sample
-/// is flagged, and sigma is the size of the scatter.
+/// before; from a circle at the star's radius, nothing flagged). Sigma is
+/// the size of the scatter, no sample's more than doubled by its model
+/// term. (Samples are flagged where the representation term of detail
+/// as fine as the elements exceeds the noise term: 156 of 983 since that
+/// term counts such detail, `fit/representation.rs`.)
 #[test]
 fn a_blurred_star_outline_is_not_an_oscillation() {
     let shape = Shape::Star {
@@ -148,7 +151,7 @@ fn a_blurred_star_outline_is_not_an_oscillation() {
         summary.flagged
     );
     assert_eq!(m.outcome, Outcome::Converged);
-    assert_eq!(summary.flagged, 0, "{summary:?}");
+    assert!(summary.worst_inflation <= 2.0, "{summary:?}");
     assert!(
         (0.7..=1.4).contains(&(scatter / sigma)),
         "ratio {}",
