@@ -362,14 +362,21 @@ fn a_binned_stage_takes_no_lobe_for_clutter() {
 /// blurred star whose bays its 9 px elements cannot follow.
 #[test]
 fn sigma_counts_the_shape_error_of_kept_elements() {
-    for id in [
+    assert_sigma_fits_the_scatter(&[
         "sine-edge/blur4/noise1/16bit/dark/segment",
         "star-a0.2/blur4/noise1/8bit/dark/circle-10pct",
-    ] {
+    ]);
+}
+
+/// Each full-sweep case of `ids` scatters within [0.7, 1.4] of its
+/// `sigma`.
+fn assert_sigma_fits_the_scatter(ids: &[&str]) {
+    for &id in ids {
         let dir = tempfile::tempdir().unwrap();
         let rows = run_case(dir.path(), "full", id, false);
         let row = rows.iter().find(|r| r["id"] == id).unwrap();
         let ratio: f64 = row["scatter_over_sigma"].parse().unwrap();
+        println!("{id}: scatter / sigma {ratio:.2}");
         assert!(
             (0.7..=1.4).contains(&ratio),
             "{id}: scatter / sigma {ratio}"
@@ -384,20 +391,10 @@ fn sigma_counts_the_shape_error_of_kept_elements() {
 /// before; now 1.23 and 1.36).
 #[test]
 fn sigma_counts_detail_about_as_fine_as_the_elements() {
-    for id in [
+    assert_sigma_fits_the_scatter(&[
         "sine-edge/blur2/noise2/16bit/bright/auto",
         "star-a0.2/blur1/noise0/16bit/dark/circle-10pct",
-    ] {
-        let dir = tempfile::tempdir().unwrap();
-        let rows = run_case(dir.path(), "full", id, false);
-        let row = rows.iter().find(|r| r["id"] == id).unwrap();
-        let ratio: f64 = row["scatter_over_sigma"].parse().unwrap();
-        println!("{id}: scatter / sigma {ratio:.2}");
-        assert!(
-            (0.7..=1.4).contains(&ratio),
-            "{id}: scatter / sigma {ratio}"
-        );
-    }
+    ]);
 }
 
 /// A corner that the turning found but the image near it could hardly

@@ -194,9 +194,11 @@ impl Representation {
 
     /// The reads `|D|` about `u` at steps `h / 2`, `h` and `2h` (0 where
     /// one does not fit or crosses a corner; all 0 when the read at `h`
-    /// does not).
+    /// does not; only the read at `h` for degrees other than 3).
     fn reads(&self, curve: &SplineCurve, u: f64) -> (f64, f64, f64) {
         match self.read(curve, u, self.h) {
+            // [`NARROW`] is for cubics: other degrees need no more reads.
+            Some(d) if self.p != 3 => (0.0, d, 0.0),
             Some(d) => (
                 self.read(curve, u, 0.5 * self.h).unwrap_or(0.0),
                 d,
@@ -224,18 +226,16 @@ impl Representation {
             return 1.0;
         }
         let rho = wide / d;
-        let (first, last) = (NARROW[0], NARROW[NARROW.len() - 1]);
-        if rho <= first.0 {
-            return first.1;
+        if rho <= NARROW[0].0 {
+            return NARROW[0].1;
         }
         if rho >= 1.0 {
             return 1.0;
         }
-        let upper = |(r, g): (f64, f64)| if rho <= r { Some((r, g)) } else { None };
-        let (hi, lo) = NARROW
-            .windows(2)
-            .find_map(|w| upper(w[1]).map(|hi| (hi, w[0])))
-            .unwrap_or(((1.0, 1.0), last));
+        // The table's points about `rho` (beyond its last, 1 at 1).
+        let k = NARROW.partition_point(|&(r, _)| r < rho);
+        let lo = NARROW[k - 1];
+        let hi = NARROW.get(k).copied().unwrap_or((1.0, 1.0));
         // Between the table's points, linear in the logarithms (the
         // factor grows as a power of the ratio where it is small).
         let t = (rho / lo.0).ln() / (hi.0 / lo.0).ln();

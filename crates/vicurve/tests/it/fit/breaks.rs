@@ -669,6 +669,32 @@ fn corners_cut_off_by_the_border_are_measured() {
     assert!(worst <= 5.0, "largest error / sigma {worst}");
 }
 
+/// A star `(r0, amplitude, lobes)` about the middle of a `size` x `size`
+/// 8-bit image, blurred by `blur` px under 2 % noise (seed `seed`),
+/// measured from the automatic start: the shape and its measurement.
+fn noisy_star(
+    size: usize,
+    (r0, amplitude, lobes): (f64, f64, u32),
+    blur: f64,
+    seed: u64,
+) -> (vicurve::truth::Shape, vicurve::fit::Measurement) {
+    let shape = vicurve::truth::Shape::Star {
+        cx: size as f64 / 2.0 - 0.2,
+        cy: size as f64 / 2.0 - 0.7,
+        r0,
+        amplitude,
+        lobes,
+        phase: 0.0,
+    };
+    let spec = crate::common::spec(shape.clone(), (size, size), blur, 0.02, seed, Some(8));
+    let image = vicurve::render::render(&spec).expect("render");
+    let init = find_silhouette(&image, &StartConfig::default())
+        .expect("start")
+        .curve;
+    let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+    (shape, m)
+}
+
 /// Lobes blurred by more than half their radius of curvature are not
 /// corners: a small star (mean radius 15 px, 5 lobes of radius of
 /// curvature about 5 px) and a larger one near the border (54 px, 7
@@ -682,29 +708,13 @@ fn corners_cut_off_by_the_border_are_measured() {
 /// (or 0.05 px) of it.
 #[test]
 fn lobes_under_a_heavy_blur_are_not_silent_corners() {
-    use crate::common::spec;
-    use vicurve::truth::Shape;
     let (mut worst_of_all, mut largest) = (0.0f64, 0.0f64);
     for (size, r0, amplitude, lobes, blur, seed) in [
         (80, 15.0, 0.11, 5, 2.6, 2),
         (80, 15.0, 0.11, 5, 2.6, 3),
         (164, 54.0, 0.15, 7, 2.5, 1),
     ] {
-        let centre = (size as f64 / 2.0 - 0.2, size as f64 / 2.0 - 0.7);
-        let shape = Shape::Star {
-            cx: centre.0,
-            cy: centre.1,
-            r0,
-            amplitude,
-            lobes,
-            phase: 0.0,
-        };
-        let spec = spec(shape.clone(), (size, size), blur, 0.02, seed, Some(8));
-        let image = vicurve::render::render(&spec).expect("render");
-        let init = find_silhouette(&image, &StartConfig::default())
-            .expect("start")
-            .curve;
-        let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+        let (shape, m) = noisy_star(size, (r0, amplitude, lobes), blur, seed);
         assert_eq!(m.outcome, Outcome::Converged);
         let (worst, error) = m
             .samples
@@ -735,23 +745,7 @@ fn lobes_under_a_heavy_blur_are_not_silent_corners() {
 /// curve, which is measured.
 #[test]
 fn lobes_that_each_tie_are_judged_together() {
-    use crate::common::spec;
-    use vicurve::truth::Shape;
-    let size = 164;
-    let shape = Shape::Star {
-        cx: size as f64 / 2.0 - 0.2,
-        cy: size as f64 / 2.0 - 0.7,
-        r0: 54.0,
-        amplitude: 0.15,
-        lobes: 7,
-        phase: 0.0,
-    };
-    let spec = spec(shape.clone(), (size, size), 2.9, 0.02, 1, Some(8));
-    let image = vicurve::render::render(&spec).expect("render");
-    let init = find_silhouette(&image, &StartConfig::default())
-        .expect("start")
-        .curve;
-    let m = measure(&image, &init, &FitConfig::default()).expect("measure");
+    let (shape, m) = noisy_star(164, (54.0, 0.15, 7), 2.9, 1);
     assert_eq!(m.outcome, Outcome::Converged);
     let max = m
         .samples
