@@ -186,7 +186,7 @@ fn settle(verdicts: &mut [Verdict]) {
         return;
     }
     let pooled = (!clearly_kept && !clearly_dropped)
-        .then(|| pooled(verdicts, |v| v.ambiguous))
+        .then(|| pooled(verdicts))
         .flatten();
     let keep_ambiguous = pooled.map_or(clearly_kept || !clearly_dropped, |(keep, _)| keep);
     for v in verdicts.iter_mut().filter(|v| v.ambiguous) {
@@ -250,10 +250,9 @@ fn judge(evidence: f64, spread: f64) -> (bool, bool, bool) {
     (keep, tie, ambiguous)
 }
 
-/// The verdict on the corners of `verdicts` that are `counted`, judged
-/// together (whether they are kept, and whether that is ambiguous):
-/// [`judge`] on their summed evidence, whose standard deviation is the root sum of
-/// squares of theirs (independent patches). `None` with fewer than two.
+/// The verdict on the ambiguous corners of `verdicts` judged together
+/// (whether they are kept, and whether that is ambiguous): [`judge`] on
+/// their summed evidence ([`summed`]). `None` with fewer than two.
 ///
 /// Why: on smooth shapes under blurs of 1.35 to 2.9 px and 2 to 3 %
 /// noise, the lobes the turning took for corners were each within two
@@ -261,8 +260,8 @@ fn judge(evidence: f64, spread: f64) -> (bool, bool, bool) {
 /// deviations), and kept by default their vertices stood 0.34 to 0.98 px
 /// off the true curve; summed, the evidence was for the smooth curve by
 /// 1.0 to 3.6 deviations.
-fn pooled(verdicts: &[Verdict], counted: impl Fn(&Verdict) -> bool) -> Option<(bool, bool)> {
-    summed(verdicts, counted).map(|(evidence, spread)| {
+fn pooled(verdicts: &[Verdict]) -> Option<(bool, bool)> {
+    summed(verdicts, |v| v.ambiguous).map(|(evidence, spread)| {
         let (keep, _, ambiguous) = judge(evidence, spread);
         (keep, ambiguous)
     })

@@ -695,6 +695,14 @@ fn noisy_star(
     (shape, m)
 }
 
+/// The largest distance of `m`'s samples from the true `shape`, pixels.
+fn largest_error(shape: &vicurve::truth::Shape, m: &vicurve::fit::Measurement) -> f64 {
+    m.samples
+        .iter()
+        .map(|s| shape.signed_distance(s.x, s.y).abs())
+        .fold(0.0f64, f64::max)
+}
+
 /// Lobes blurred by more than half their radius of curvature are not
 /// corners: a small star (mean radius 15 px, 5 lobes of radius of
 /// curvature about 5 px) and a larger one near the border (54 px, 7
@@ -747,11 +755,7 @@ fn lobes_under_a_heavy_blur_are_not_silent_corners() {
 fn lobes_that_each_tie_are_judged_together() {
     let (shape, m) = noisy_star(164, (54.0, 0.15, 7), 2.9, 1);
     assert_eq!(m.outcome, Outcome::Converged);
-    let max = m
-        .samples
-        .iter()
-        .map(|s| shape.signed_distance(s.x, s.y).abs())
-        .fold(0.0f64, f64::max);
+    let max = largest_error(&shape, &m);
     println!("{} corners, max error {max:.3} px", m.corners_found.len());
     assert!(m.corners_found.is_empty(), "{:?}", m.corners_found);
     assert!(max <= 0.25, "{max:.3} px");
@@ -770,11 +774,7 @@ fn corners_judged_both_ways_are_judged_together() {
     for seed in [6, 11] {
         let (shape, m) = noisy_star(164, (54.0, 0.15, 7), 2.9, seed);
         assert_eq!(m.outcome, Outcome::Converged);
-        let max = m
-            .samples
-            .iter()
-            .map(|s| shape.signed_distance(s.x, s.y).abs())
-            .fold(0.0f64, f64::max);
+        let max = largest_error(&shape, &m);
         println!(
             "seed {seed}: {} corners, max error {max:.3} px",
             m.corners_found.len()
