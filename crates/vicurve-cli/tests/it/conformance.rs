@@ -435,7 +435,7 @@ fn a_corner_judged_on_ambiguous_evidence_is_covered_by_sigma() {
 /// than the fit's tolerance is taken, however small (`fit/blur.rs`,
 /// `blur_change_matters`): on the noiseless 16-bit star under a 4 px blur
 /// the pixel-edge stage ended under a blur of 4.0092 px (the refit's
-/// 4.0018 within the fixed 0.01 px), and the curvature shift it left put
+/// 4.0004 within the fixed 0.01 px), and the curvature shift it left put
 /// the curve 5.2e-4 px off (scatter, measured before); now 6.4e-5 px,
 /// the blur 4.0004 px.
 #[test]

@@ -49,10 +49,9 @@ pub(crate) const BLUR_TOLERANCE: f64 = 0.01;
 ///
 /// Why: on a noiseless 16-bit star (mean radius 140 px, amplitude 0.1, 6
 /// lobes, blur 4 px) the stage from the automatic start ended under a blur
-/// of 4.0092 px whose refit, 4.0018, was within the fixed tolerance; the
-/// curvature shift it left, 8e-4 px at the lobes, put the curve 4.5e-4 px
-/// RMS off (1e-3 at worst) where the circle start's reached 1.2e-4, and
-/// `sigma` 1.6e-4 px.
+/// of 4.0092 px whose refit, 4.0004, was within the fixed tolerance; the
+/// curvature shift it left, about 1e-3 px at the lobes, put the curve
+/// 5.2e-4 px RMS off where `sigma` said 1.6e-4 (taken: 6.4e-5 px).
 pub(super) fn blur_change_matters(
     reference: &SplineCurve,
     (blur, fitted): (f64, f64),
