@@ -50,6 +50,16 @@ pub enum Tone {
     Srgb,
 }
 
+/// The exponent of the usual encodings (sRGB is close to it): where the
+/// power law's fit starts again when from linear light it stops at its
+/// iteration limit ([`power_law`]). Why: from linear light the fit can
+/// crawl along a curved valley (the light's levels and bumps must change
+/// with the exponent); on sharp gamma-encoded edges it stopped at 1.3 to
+/// 1.6, where the encoding went unseen and the edge was measured 0.03 to
+/// 0.09 px off (docs/benchmarks.md, "A power law that did not reach its
+/// minimum").
+const USUAL_GAMMA: f64 = 2.2;
+
 /// Smallest and largest exponent accepted for [`Tone::Gamma`].
 const GAMMA_RANGE: (f64, f64) = (0.2, 5.0);
 
@@ -92,6 +102,9 @@ impl Tone {
     fn encode(self, l: f64) -> (f64, f64) {
         match self {
             Tone::Auto | Tone::Linear => (l, 1.0),
+            // The linear fits' power law (`ln gamma` held at 0): `l^1` is
+            // `l` and `l / l` is 1, bit for bit, without the `powf`.
+            Tone::Gamma(g) if g == 1.0 && l >= LIGHT_FLOOR => (l, 1.0),
             Tone::Gamma(g) => {
                 let l = l.max(LIGHT_FLOOR);
                 let v = l.powf(1.0 / g);
@@ -267,9 +280,16 @@ pub(crate) fn allowed_spread(alternatives: impl Iterator<Item = (f64, f64)> + Cl
 /// (ITU-R BT.1886 video).
 pub const STANDARD_TONES: [Tone; 3] = [Tone::Srgb, Tone::Gamma(2.2), Tone::Gamma(2.4)];
 /// A standard encoding is chosen when its residual sum of squares is
-/// within this many noise variances of the fitted power law's (two
-/// standard deviations of a chi-square of one degree of freedom).
-const CONSISTENT: f64 = 4.0;
+/// within this many noise variances of the fitted power law's (three
+/// standard deviations of a chi-square of one degree of freedom, as
+/// [`UNDECIDED`]). Why not two: the data hardly tell an exponent from its
+/// neighbours, and the encodings in use are far likelier than the one
+/// fitted. With the power law at its minimum ([`USUAL_GAMMA`]), two
+/// noiseless 2.2-encoded edges of the shapes probe fitted 2.07 and 2.32,
+/// 2.2 between 4 and 9 noise variances behind; measured through the
+/// fitted law they were 0.032 and 0.049 px off (RMS), through 2.2 0.012
+/// and 0.004 px.
+const CONSISTENT: f64 = 9.0;
 /// Share of its shift a fitted power law (no standard encoding fits)
 /// may leave: the reading mixes the profiles of a band (the pixels'
 /// orientations, curvature, uneven levels) whose encoded mean is not the
@@ -523,11 +543,20 @@ fn read(
     // distortions would be fitting.
     let cluttered = noise_floor.is_some_and(|n| pixel_noise > MISFIT * n);
     // The power law, and the Gaussian the encodings are weighed against
-    // should linear light be kept: both start from the linear fit, and
-    // neither needs the other, so they are fitted side by side.
+    // should linear light be kept (from the linear fit): neither needs the
+    // other, so they are fitted side by side.
+    // The Gaussian's first alternative (sRGB, always fitted when linear
+    // light is kept, [`alternatives`]) is fitted with it, beside the power
+    // law: it needs neither the power law nor its verdict.
     let (power, gaussian) = rayon::join(
-        || with([true, true], None).minimise(linear.0, false),
-        || (!cluttered).then(|| GaussianBase::fit(fit, squares, &linear.0, spread)),
+        || power_law(with([true, true], None), start, &linear.0),
+        || {
+            (!cluttered).then(|| {
+                let base = GaussianBase::fit(fit, squares, &linear.0, spread);
+                let first = base.encoded(0);
+                (base, first)
+            })
+        },
     );
     let power = power?;
     // The noise: that of neighbouring pixels, or the power law's own
@@ -558,6 +587,10 @@ fn read(
         // allows (a faint, noisy or noiseless 8-bit edge can hardly tell
         // them from linear light) say how far the edge may be (none in a
         // cluttered band).
+        let alternatives = match gaussian {
+            Some((base, first)) => alternatives(fit, &base, first, linear.1, noise),
+            None => [None; 3],
+        };
         // A power law of an encoding's exponent the profile prefers, not
         // by enough to be chosen, leaves the edge where that law would put
         // it as likely as not, weighed or not.
@@ -565,10 +598,6 @@ fn read(
             point[R0].abs()
         } else {
             0.0
-        };
-        let alternatives = match gaussian {
-            Some(base) => alternatives(fit, &base, linear.1, noise),
-            None => [None; 3],
         };
         let fitted = alternatives.iter().flatten().map(|a| (a.excess, a.centre));
         return Some(ToneEstimate {
@@ -593,10 +622,39 @@ fn read(
     })
 }
 
+/// The power law's fit `fit` (`r0` and `ln gamma` free) from the linear
+/// fit's unknowns `linear`; when that stops at its iteration limit, also
+/// from the fit under the usual exponent ([`USUAL_GAMMA`], from `start`),
+/// the better of the two kept. None when neither converges.
+fn power_law(
+    fit: ProfileFit,
+    start: [f64; UNKNOWNS],
+    linear: &[f64; UNKNOWNS],
+) -> Option<([f64; UNKNOWNS], f64)> {
+    let (from_linear, limited) = fit.minimise_ended(*linear)?;
+    if !limited {
+        return Some(from_linear);
+    }
+    let usual = ProfileFit {
+        free: [true, false],
+        fixed: Some(Tone::Gamma(USUAL_GAMMA)),
+        ..fit
+    };
+    let from_usual = usual.minimise(start, false).and_then(|(mut point, _)| {
+        point[LOG_GAMMA] = USUAL_GAMMA.ln();
+        fit.minimise(point, false)
+    });
+    match from_usual {
+        Some(u) if u.1 < from_linear.1 => Some(u),
+        _ => Some(from_linear),
+    }
+}
+
 /// Each standard encoding as an [`Alternative`] to linear light, both
 /// fitted to the profile of `fit` with a Gaussian blur (`base`, the
-/// measurement's own model of the edge), from the residual sum of squares
-/// `linear` of the linear fit; `noise`: the noise variance of the
+/// measurement's own model of the edge; `first`, its fit of the first
+/// standard encoding, [`GaussianBase::encoded`]), from the residual sum of
+/// squares `linear` of the linear fit; `noise`: the noise variance of the
 /// evidence, or the Gaussian linear fit's residual variance where it
 /// misfits more. None when the Gaussian, in the light that fits it best,
 /// fits the profile clearly worse than the bumps in linear light (by the
@@ -614,18 +672,18 @@ fn read(
 fn alternatives(
     fit: ProfileFit,
     base: &GaussianBase,
+    first: Option<([f64; UNKNOWNS], f64)>,
     linear: f64,
     noise: f64,
 ) -> [Option<Alternative>; 3] {
     let mut found = [None; 3];
-    let gaussian = base.fit;
-    let Some((base, rss)) = base.min else {
+    let Some((centre, rss)) = base.min.map(|(point, rss)| (point[R0], rss)) else {
         return found;
     };
     let pixels: f64 = fit.bins.iter().map(|b| b[0]).sum();
     let noise = noise.max(rss / (pixels - 6.0).max(1.0));
-    let mut fits = [None; 3];
-    for (k, &tone) in STANDARD_TONES.iter().enumerate() {
+    let mut fits = [first, None, None];
+    for k in 1..STANDARD_TONES.len() {
         let ruled_out = fits[..k]
             .iter()
             .flatten()
@@ -633,11 +691,7 @@ fn alternatives(
         if ruled_out {
             break;
         }
-        let encoded = ProfileFit {
-            fixed: Some(tone),
-            ..gaussian
-        };
-        fits[k] = encoded.minimise(in_light(tone, &base), false);
+        fits[k] = base.encoded(k);
     }
     // A blur that is not Gaussian (a defocus, the paper's profile): the
     // encodings' distortions would be fitting its shape, not the light.
@@ -653,7 +707,7 @@ fn alternatives(
             found[k] = Some(Alternative {
                 tone: STANDARD_TONES[k],
                 excess: (fit.1 - rss) / noise,
-                centre: fit.0[R0] - base[R0],
+                centre: fit.0[R0] - centre,
             });
         }
     }
@@ -698,6 +752,19 @@ impl<'a> GaussianBase<'a> {
             fit: gaussian,
             min: gaussian.minimise(start, false),
         }
+    }
+
+    /// The fit of the `k`-th standard encoding ([`STANDARD_TONES`]) with
+    /// this Gaussian blur, from its minimum taken to that encoding's light;
+    /// none when the base has no minimum or the fit does not converge.
+    fn encoded(&self, k: usize) -> Option<([f64; UNKNOWNS], f64)> {
+        let (base, _) = self.min?;
+        let tone = STANDARD_TONES[k];
+        let encoded = ProfileFit {
+            fixed: Some(tone),
+            ..self.fit
+        };
+        encoded.minimise(in_light(tone, &base), false)
     }
 }
 
@@ -927,23 +994,32 @@ impl ProfileFit<'_> {
     /// a small object's band, about 700 pixels, can take more than 100
     /// steps to settle to 1e-7).
     fn minimise(&self, start: [f64; UNKNOWNS], settled: bool) -> Option<([f64; UNKNOWNS], f64)> {
+        match self.minimise_ended(start)? {
+            (_, true) if settled => None,
+            (min, _) => Some(min),
+        }
+    }
+
+    /// [`ProfileFit::minimise`] of a fit that need not settle, and whether
+    /// it stopped at its iteration limit.
+    fn minimise_ended(&self, start: [f64; UNKNOWNS]) -> Option<(([f64; UNKNOWNS], f64), bool)> {
         let eval = self.eval(&start)?;
         let params = LmParams {
             max_iterations: 100,
             ..LmParams::default()
         };
         let min = lm::minimise(self, start, eval, &params);
-        match min.end {
-            lm::End::Converged | lm::End::Stalled => {}
-            lm::End::IterationLimit if !settled => {}
-            lm::End::IterationLimit | lm::End::Stopped(()) => return None,
-        }
+        let limited = match min.end {
+            lm::End::Converged | lm::End::Stalled => false,
+            lm::End::IterationLimit => true,
+            lm::End::Stopped(()) => return None,
+        };
         let within: f64 = self
             .bins
             .iter()
             .map(|b| (b[3] - b[2] * b[2] / b[0]).max(0.0))
             .sum();
-        Some((min.point, min.eval.cost + within))
+        Some(((min.point, min.eval.cost + within), limited))
     }
 
     /// The evaluation at `x`; `None` when it is not finite. The sums skip
@@ -958,6 +1034,8 @@ impl ProfileFit<'_> {
             matrix: [[0.0; UNKNOWNS]; UNKNOWNS],
         };
         let gamma = x[LOG_GAMMA].exp();
+        // A Gaussian fit's blur, `ln s = x[2]`.
+        let s = x[2].exp();
         let mut j = [0.0; UNKNOWNS];
         let mut active = [0usize; UNKNOWNS];
         let normals = if self.gaussian { self.normals } else { &[] };
@@ -970,7 +1048,6 @@ impl ProfileFit<'_> {
             if let (true, Some(&[nx, ny])) = (self.gaussian, normals.get(i)) {
                 // `c (2 P - 1)`, `P` the blurred square pixel's
                 // distribution across the edge, `c = x[1]`, `ln s = x[2]`.
-                let s = x[2].exp();
                 let (cdf, pdf, ds) = pixel_edge_cdf_ds(r - x[R0], nx, ny, s);
                 light += x[1] * (2.0 * cdf - 1.0);
                 slope += x[1] * 2.0 * pdf;
@@ -980,7 +1057,6 @@ impl ProfileFit<'_> {
                 used = 3;
             } else if self.gaussian {
                 // `c erf(x / (sqrt 2 s))` of `c = x[1]`, `ln s = x[2]`.
-                let s = x[2].exp();
                 let z = (r - x[R0]) / s;
                 let edge = libm::erf(z / std::f64::consts::SQRT_2);
                 let density = 2.0 * (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
