@@ -625,7 +625,8 @@ fn read(
 /// The power law's fit `fit` (`r0` and `ln gamma` free) from the linear
 /// fit's unknowns `linear`; when that stops at its iteration limit, also
 /// from the fit under the usual exponent ([`USUAL_GAMMA`], from `start`),
-/// the better of the two kept. None when neither converges.
+/// the better of the two kept. None when the fit from linear light cannot
+/// start (its evaluation is not finite).
 fn power_law(
     fit: ProfileFit,
     start: [f64; UNKNOWNS],
