@@ -213,13 +213,8 @@ fn centroid(csv: &str) -> [f64; 2] {
 }
 
 /// Run the sweep's case `id` of `set` into `dir` (with `--samples` when
-/// `samples`), and return the rows of its CSV.
-fn run_case(
-    dir: &std::path::Path,
-    set: &str,
-    id: &str,
-    samples: bool,
-) -> Vec<HashMap<String, String>> {
+/// `samples`), and return its row of the CSV.
+fn run_case(dir: &std::path::Path, set: &str, id: &str, samples: bool) -> HashMap<String, String> {
     let out_dir = dir.display().to_string();
     let mut args = vec![
         "bench",
@@ -236,6 +231,9 @@ fn run_case(
     }
     ok(&vicurve(&args));
     read_rows(&std::fs::read_to_string(dir.join("conformance.csv")).unwrap())
+        .into_iter()
+        .find(|r| r["id"] == id)
+        .unwrap()
 }
 
 /// The file of case `id` that `--samples` wrote into `dir` with extension
@@ -260,7 +258,7 @@ fn read_json(path: &str) -> serde_json::Value {
 fn conformance_samples_measure_again_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let id = "disc/blur1/noise1/8bit/dark/circle-10pct";
-    let rows = run_case(dir.path(), "ci", id, true);
+    let row = run_case(dir.path(), "ci", id, true);
     let file = |ext: &str| sample_file(dir.path(), id, ext);
     let samples = std::fs::read_to_string(file("csv")).unwrap();
     let points = file("points.csv");
@@ -288,7 +286,6 @@ fn conformance_samples_measure_again_from_the_command_line() {
         &stats,
     ]));
     let stats = read_json(&stats);
-    let row = rows.iter().find(|r| r["id"] == id).unwrap();
     for key in ["bias", "scatter"] {
         let (got, want) = (
             stats[key].as_f64().unwrap(),
@@ -366,8 +363,7 @@ fn sigma_counts_the_shape_error_of_kept_elements() {
 fn assert_sigma_fits_the_scatter(ids: &[&str]) {
     for &id in ids {
         let dir = tempfile::tempdir().unwrap();
-        let rows = run_case(dir.path(), "full", id, false);
-        let row = rows.iter().find(|r| r["id"] == id).unwrap();
+        let row = run_case(dir.path(), "full", id, false);
         let ratio: f64 = row["scatter_over_sigma"].parse().unwrap();
         println!("{id}: scatter / sigma {ratio:.2}");
         assert!(
@@ -415,8 +411,7 @@ fn sigma_at_an_open_edges_ends_is_not_charged_as_fine_detail() {
 fn a_corner_judged_on_ambiguous_evidence_is_covered_by_sigma() {
     let id = "polygon/blur2/noise5/16bit/bright/circle-10pct";
     let dir = tempfile::tempdir().unwrap();
-    let rows = run_case(dir.path(), "full", id, true);
-    let row = rows.iter().find(|r| r["id"] == id).unwrap();
+    let row = run_case(dir.path(), "full", id, true);
     let bias: f64 = row["bias"].parse().unwrap();
     let samples = read_rows(&std::fs::read_to_string(sample_file(dir.path(), id, "csv")).unwrap());
     let worst = samples
@@ -442,8 +437,7 @@ fn a_corner_judged_on_ambiguous_evidence_is_covered_by_sigma() {
 fn a_small_blur_change_that_moves_a_curved_edge_is_taken() {
     let id = "star-a0.1/blur4/noise0/16bit/dark/auto";
     let dir = tempfile::tempdir().unwrap();
-    let rows = run_case(dir.path(), "full", id, false);
-    let row = rows.iter().find(|r| r["id"] == id).unwrap();
+    let row = run_case(dir.path(), "full", id, false);
     let scatter: f64 = row["scatter"].parse().unwrap();
     println!("{id}: scatter {scatter:.2e} px");
     assert!(scatter <= 1.5e-4, "{id}: scatter {scatter:e} px");

@@ -1186,9 +1186,10 @@ impl Schedule<'_> {
             // part of the way: the fixed tolerance alone (a backlight at
             // 1.2 times the clip level came out 0.013 px small with the
             // curvature's, against 1.9e-3).
-            let matters = match corr.censored() {
-                true => (fitted - blur).abs() > BLUR_TOLERANCE,
-                false => blur_change_matters(&self.current, (blur, fitted), tolerance),
+            let matters = if corr.censored() {
+                (fitted - blur).abs() > BLUR_TOLERANCE
+            } else {
+                blur_change_matters(&self.current, (blur, fitted), tolerance)
             };
             if matters {
                 self.pixel_edge = Some(Profile::PixelEdge {
